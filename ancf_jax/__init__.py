@@ -1,0 +1,24 @@
+"""ancf_jax: a JAX-accelerated, differentiable simulator for very flexible beams and
+cables (absolute nodal coordinate formulation) coupled with rigid multibody systems.
+
+Implements Seo, Jung & Park, "Nonlinear Dynamic Analysis of a Large Deformable Beam
+Using Absolute Nodal Coordinates" (planar ANCF beam, Eqs. 1–21) and goes beyond it.
+
+Importing the package turns on float64 in JAX: the stiff axial modes of a steel wire
+make float32 simulations diverge.
+"""
+
+import jax as _jax
+
+_jax.config.update("jax_enable_x64", True)
+
+from ._version import __version__  # noqa: E402
+from .errors import ConstraintError, ModelError, SimulationError, StaticsError  # noqa: E402
+
+__all__ = [
+    "__version__",
+    "ModelError",
+    "ConstraintError",
+    "StaticsError",
+    "SimulationError",
+]

@@ -1,0 +1,192 @@
+"""A beam: mesh + section + formulation + Rayleigh damping, and its assembled physics.
+
+All elastic quantities derive from the one element energy
+:func:`ancf_jax.element.strain_energy`: the generalized elastic force is its negative
+gradient (Eq. 9, Q_k = ∂U/∂e in the paper enters Eq. 10 on the left-hand side, so the
+force acting on the coordinates is −Q_k), and the tangent stiffness is its Hessian,
+computed per element under ``jax.vmap`` and assembled into a block-tridiagonal matrix.
+
+Nodal coordinates of a beam are an array ``nodes`` of shape (n_max + 1, 4).
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from .element import mass as element_mass
+from .element import shape_functions as sf
+from .element.strain_energy import Formulation, strain_energy
+from .element.stress import bending_stress
+from .errors import ModelError
+from .linalg import BlockTridiagonal
+from .mesh import BeamMesh
+from .section import Section
+from .validation import check_nonnegative
+
+
+class Beam(eqx.Module):
+    """A planar ANCF beam.
+
+    Attributes:
+        mesh: reference geometry (possibly padded).
+        section: cross-section and material.
+        alpha: Rayleigh mass-proportional damping coefficient α [1/s] (Eq. 11).
+        beta: Rayleigh stiffness-proportional damping coefficient β [s] (Eq. 11).
+        formulation: strain measures and quadrature (static).
+    """
+
+    mesh: BeamMesh
+    section: Section
+    alpha: jnp.ndarray
+    beta: jnp.ndarray
+    formulation: Formulation = eqx.field(static=True)
+
+    def __init__(self, mesh: BeamMesh, section: Section, *, alpha=0.0, beta=0.0,
+                 formulation: Formulation | None = None):
+        self.mesh = mesh
+        self.section = section
+        self.alpha = jnp.asarray(check_nonnegative("alpha (Rayleigh, mass-proportional)", alpha, "1/s"), float)
+        self.beta = jnp.asarray(check_nonnegative("beta (Rayleigh, stiffness-proportional)", beta, "s"), float)
+        self.formulation = Formulation() if formulation is None else formulation
+        if self.formulation.curvature == "small_strain":
+            ref = jax.device_get(mesh.reference_nodes)
+            n = int(mesh.n_elements)
+            t = ref[: n + 1, 2:]
+            if abs(t[:, 0] * t[0, 1] - t[:, 1] * t[0, 0]).max() > 1e-12:
+                raise ModelError("curvature='small_strain' (Eq. 17) needs a straight reference "
+                                 "configuration; use curvature='exact' for curved beams")
+
+    # ------------------------------------------------------------------ sizes
+    @property
+    def n_nodes(self) -> int:
+        return self.mesh.n_nodes
+
+    @property
+    def n_coordinates(self) -> int:
+        return 4 * self.mesh.n_nodes
+
+    # ------------------------------------------------------------------ energy
+    def element_energies(self, nodes):
+        """Strain energy of every element [J], shape (n_max,), zero for inactive ones."""
+        e = self.mesh.element_coordinates(nodes)
+        e_ref = self.mesh.reference_elements
+        ea = self.section.axial_stiffness
+        ei = self.section.bending_stiffness
+        u = jax.vmap(lambda ee, er, l: strain_energy(ee, er, l, ea, ei, self.formulation))(
+            e, e_ref, self.mesh.element_lengths)
+        return jnp.where(self.mesh.active, u, 0.0)
+
+    def strain_energy(self, nodes):
+        """Total strain energy U of the beam [J] (Eq. 8 summed over elements)."""
+        return jnp.sum(self.element_energies(nodes))
+
+    def elastic_force(self, nodes):
+        """Generalized elastic force −∂U/∂e, shape (n_max + 1, 4) [N, N·m] (Eq. 9)."""
+        return -jax.grad(self.strain_energy)(nodes)
+
+    def element_stiffness(self, nodes):
+        """Tangent stiffness ∂²U/∂e² of every element, shape (n_max, 8, 8), zero when inactive."""
+        e = self.mesh.element_coordinates(nodes)
+        e_ref = self.mesh.reference_elements
+        ea = self.section.axial_stiffness
+        ei = self.section.bending_stiffness
+        h = jax.vmap(jax.hessian(
+            lambda ee, er, l: strain_energy(ee, er, l, ea, ei, self.formulation)))(
+            e, e_ref, self.mesh.element_lengths)
+        return jnp.where(self.mesh.active[:, None, None], h, 0.0)
+
+    def stiffness(self, nodes) -> BlockTridiagonal:
+        """Assembled tangent stiffness (block tridiagonal, 4×4 node blocks)."""
+        return BlockTridiagonal.from_element_matrices(self.element_stiffness(nodes))
+
+    def stiffness_product(self, nodes, direction):
+        """K(nodes) · direction as one Jacobian-vector product of the elastic force."""
+        return -jax.jvp(self.elastic_force, (nodes,), (direction,))[1]
+
+    # ------------------------------------------------------------------ inertia
+    def element_mass(self):
+        """Element mass matrices (Eq. 6), shape (n_max, 8, 8), zero when inactive."""
+        m = jax.vmap(lambda l: element_mass.mass_matrix(l, self.section.mass_per_length))(
+            self.mesh.element_lengths)
+        return jnp.where(self.mesh.active[:, None, None], m, 0.0)
+
+    def mass(self) -> BlockTridiagonal:
+        """Assembled consistent mass matrix with a unit dummy mass on inactive nodes."""
+        m = BlockTridiagonal.from_element_matrices(self.element_mass())
+        dummy = jnp.where(self.mesh.active_nodes, 0.0, 1.0)
+        return m.add_diagonal(jnp.repeat(dummy, 4))
+
+    def gravity_load(self, gravity):
+        """Consistent gravity load, shape (n_max + 1, 4) [N, N·m]."""
+        f = jax.vmap(lambda l: element_mass.gravity_load(l, self.section.mass_per_length, gravity))(
+            self.mesh.element_lengths)
+        f = jnp.where(self.mesh.active[:, None], f, 0.0)
+        out = jnp.zeros((self.n_nodes, 4))
+        return out.at[:-1].add(f[:, :4]).at[1:].add(f[:, 4:])
+
+    @property
+    def total_mass(self):
+        """ρA · L of the active elements [kg]."""
+        return self.section.mass_per_length * self.mesh.length
+
+    # ------------------------------------------------------------------ kinematics
+    def element_at(self, nodes, s):
+        """(element coordinates (8,), local x, element length, element index) at arc length s."""
+        k, x = self.mesh.locate(s)
+        e = jnp.concatenate([nodes[k], nodes[k + 1]])
+        return e, x, self.mesh.element_lengths[k], k
+
+    def position(self, nodes, s):
+        """Position [m] of the point at reference arc length s, shape (2,)."""
+        e, x, l, _ = self.element_at(nodes, s)
+        return sf.position(e, x, l)
+
+    def slope(self, nodes, s):
+        """Slope ∂r/∂x at arc length s, shape (2,)."""
+        e, x, l, _ = self.element_at(nodes, s)
+        return sf.slope(e, x, l)
+
+    # ------------------------------------------------------------------ stress
+    # (jitted: these are the post-processing entry points users call eagerly)
+    @eqx.filter_jit
+    def stress(self, nodes, s, y=None, measure="exact"):
+        """Signed bending stress σ [Pa] at arc length s on fibre y (default: outer fibre,
+        left side) (Eqs. 15–18)."""
+        y = self.section.fibre_distance if y is None else y
+        e, x, l, k = self.element_at(nodes, s)
+        e_ref = jnp.concatenate([self.mesh.reference_nodes[k], self.mesh.reference_nodes[k + 1]])
+        return bending_stress(e, e_ref, x, l, self.section.youngs_modulus, y, measure)
+
+    @eqx.filter_jit
+    def element_stress(self, nodes, element, xi, y=None, measure="exact"):
+        """Stress [Pa] in element ``element`` at local coordinate ξ = x/l ∈ [0, 1]."""
+        y = self.section.fibre_distance if y is None else y
+        e = self.mesh.element_coordinates(nodes)[element]
+        e_ref = self.mesh.reference_elements[element]
+        l = self.mesh.element_lengths[element]
+        return bending_stress(e, e_ref, xi * l, l, self.section.youngs_modulus, y, measure)
+
+    @eqx.filter_jit
+    def stress_along(self, nodes, points_per_element=11, y=None, measure="exact"):
+        """Stress at ``points_per_element`` equally spaced points of every element.
+
+        Returns:
+            (s, sigma), each shape (n_max, points_per_element); entries of inactive
+            elements are NaN (so plots and maxima skip them).
+        """
+        xi = jnp.linspace(0.0, 1.0, points_per_element)
+        elems = jnp.arange(self.mesh.n_max)
+        sig = jax.vmap(lambda k: jax.vmap(lambda z: self.element_stress(nodes, k, z, y, measure))(xi))(elems)
+        s = self.mesh.node_arc_lengths[:-1, None] + xi[None, :] * self.mesh.element_lengths[:, None]
+        mask = self.mesh.active[:, None]
+        return jnp.where(mask, s, jnp.nan), jnp.where(mask, sig, jnp.nan)
+
+    @eqx.filter_jit
+    def max_stress(self, nodes, points_per_element=21, y=None, measure="exact"):
+        """Maximum |σ| over the beam [Pa] and the arc length where it occurs [m]."""
+        s, sig = self.stress_along(nodes, points_per_element, y, measure)
+        a = jnp.where(jnp.isnan(sig), -jnp.inf, jnp.abs(sig)).ravel()
+        i = jnp.argmax(a)
+        return a[i], s.ravel()[i]

@@ -1,0 +1,160 @@
+"""Elastic strain energy of the planar ANCF element, written once (paper Eq. 8).
+
+Everything elastic comes from :func:`strain_energy`: the generalized elastic force of
+Eq. 9 is its (negative) gradient and the tangent stiffness its Hessian, both by
+automatic differentiation (see :mod:`ancf_jax.beam`). Nothing is derived by hand.
+
+Energy (per element, reference arc length x ∈ [0, l], reference metric g = |r₀'|):
+
+    U = ∫₀ˡ ½ EA ε(x)² g dx + ∫₀ˡ ½ EI (κ(x) − κ₀(x))² g dx
+
+Axial strain measures (``axial_strain``):
+
+* ``"green_lagrange"``: ε = ½ (r'·r' − g²) / g²  (Green–Lagrange; default)
+* ``"engineering"``:    ε = |r'| / g − 1          (as in Exudyn's ANCFCable2D)
+
+Bending measures (``curvature``):
+
+* ``"exact"``: κ = (r' × r'') / |r'|³ (Eq. 16) with the signed planar cross product
+  r' × r'' = r'ₓ r''ᵧ − r'ᵧ r''ₓ, so that κ² is smooth and its gradient finite on a
+  straight beam (|r' × r''| would not be differentiable there).
+* ``"material"``: κ = (r' × r'') / |r'|² (curvature per unit reference length, as in
+  Exudyn's ANCFCable2D); useful for cross-checks.
+* ``"small_strain"``: the approximation of Eq. 17, κ ≈ |r''|, giving the classical
+  bending energy ½ EI r''·r'' (Berzeri & Shabana 2000). It is only rotation invariant
+  for a straight reference configuration, so it is restricted to that case.
+
+Quadrature. The axial and bending terms are integrated with separate rules. The
+default integrates the axial term with the 3-point Gauss–Lobatto rule and the bending
+term with 3-point Gauss. Full integration of the axial term (5-point Gauss, exact for
+the degree-8 Green–Lagrange integrand) makes the cubic element lock in bending: the
+axial strain field of a bent cubic element carries a spurious quadratic part that full
+integration penalises with the large EA. Three Lobatto points keep the constant, linear
+and quadratic axial strain modes (no zero-energy mode, unlike 2-point Gauss) while
+relaxing that coupling; the convergence studies in the tests and in
+``benchmarks/m1_convergence.py`` show the effect. Both rules are options.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from ..errors import ModelError
+from .quadrature import RULES, rule
+from .shape_functions import slope, slope_derivative
+
+AXIAL_STRAINS = ("green_lagrange", "engineering")
+CURVATURES = ("exact", "material", "small_strain")
+
+
+def cross2(a, b):
+    """Signed planar cross product a × b = aₓ bᵧ − aᵧ bₓ (scalar)."""
+    return a[0] * b[1] - a[1] * b[0]
+
+
+class Formulation(eqx.Module):
+    """Choice of strain measures and quadrature rules (all static: part of the trace).
+
+    Attributes:
+        axial_strain: ``"green_lagrange"`` or ``"engineering"``.
+        curvature: ``"exact"`` (Eq. 16), ``"material"`` or ``"small_strain"`` (Eq. 17).
+        axial_quadrature: (kind, points), kind ``"gauss"`` or ``"lobatto"``.
+        bending_quadrature: (kind, points).
+    """
+
+    axial_strain: str = eqx.field(static=True, default="green_lagrange")
+    curvature: str = eqx.field(static=True, default="exact")
+    axial_quadrature: tuple = eqx.field(static=True, default=("lobatto", 3))
+    bending_quadrature: tuple = eqx.field(static=True, default=("gauss", 3))
+
+    def __check_init__(self):
+        if self.axial_strain not in AXIAL_STRAINS:
+            raise ModelError(f"axial_strain must be one of {AXIAL_STRAINS}, got {self.axial_strain!r}")
+        if self.curvature not in CURVATURES:
+            raise ModelError(f"curvature must be one of {CURVATURES}, got {self.curvature!r}")
+        for name in ("axial_quadrature", "bending_quadrature"):
+            q = getattr(self, name)
+            if (not isinstance(q, tuple) or len(q) != 2 or q[0] not in RULES
+                    or not isinstance(q[1], int) or q[1] < (2 if q[0] == "lobatto" else 1)
+                    or q[1] > 10):
+                raise ModelError(
+                    f"{name} must be (kind, points) with kind in {RULES} and 1..10 points "
+                    f"(2..10 for lobatto), got {q!r}")
+
+
+def axial_strain(e, e_ref, x, length, measure="green_lagrange"):
+    """Axial strain ε at reference arc length x (dimensionless).
+
+    Args:
+        e, e_ref: current and stress-free reference element coordinates, shape (8,).
+        x: local reference arc length [m]; length: element length l [m].
+        measure: ``"green_lagrange"`` or ``"engineering"``.
+    """
+    r1 = slope(e, x, length)
+    g2 = jnp.dot(slope(e_ref, x, length), slope(e_ref, x, length))
+    if measure == "green_lagrange":
+        return 0.5 * (jnp.dot(r1, r1) - g2) / g2
+    return jnp.sqrt(jnp.dot(r1, r1) / g2) - 1.0
+
+
+def curvature(e, x, length, measure="exact"):
+    """Signed curvature κ at x [1/m]; positive when the centre line turns counter-clockwise.
+
+    ``"exact"``: Eq. 16, (r' × r'')/|r'|³. ``"material"``: (r' × r'')/|r'|².
+    ``"small_strain"``: Eq. 17, |r''| with the sign of r' × r'' (the paper's
+    approximation for |r'| ≈ 1; its magnitude is what Eq. 17 prints).
+    """
+    r1 = slope(e, x, length)
+    r2 = slope_derivative(e, x, length)
+    c = cross2(r1, r2)
+    if measure == "exact":
+        return c / jnp.dot(r1, r1) ** 1.5
+    if measure == "material":
+        return c / jnp.dot(r1, r1)
+    if measure == "small_strain":
+        n2 = jnp.dot(r2, r2)
+        safe = jnp.where(n2 > 0.0, n2, 1.0)  # keeps the gradient finite at r'' = 0
+        return jnp.sign(c) * jnp.where(n2 > 0.0, jnp.sqrt(safe), 0.0)
+    raise ModelError(f"curvature measure must be one of {CURVATURES}, got {measure!r}")
+
+
+def strain_energy(e, e_ref, length, axial_stiffness, bending_stiffness,
+                  formulation: Formulation = Formulation()):
+    """Strain energy U of one element [J] (Eq. 8).
+
+    Args:
+        e: current element coordinates, shape (8,) [m, -].
+        e_ref: stress-free reference coordinates, shape (8,); a straight reference has
+            unit slopes along the element.
+        length: reference element length l [m].
+        axial_stiffness: EA [N].
+        bending_stiffness: EI [N·m²].
+        formulation: strain measures and quadrature rules.
+
+    Returns:
+        Scalar energy [J].
+    """
+    xa, wa = rule(*formulation.axial_quadrature)
+    xb, wb = rule(*formulation.bending_quadrature)
+
+    def metric(x):
+        r1 = slope(e_ref, x, length)
+        return jnp.sqrt(jnp.dot(r1, r1))
+
+    def axial_density(x):
+        eps = axial_strain(e, e_ref, x, length, formulation.axial_strain)
+        return 0.5 * axial_stiffness * eps**2 * metric(x)
+
+    def bending_density(x):
+        if formulation.curvature == "small_strain":
+            r2 = slope_derivative(e, x, length)
+            return 0.5 * bending_stiffness * jnp.dot(r2, r2)
+        dk = (curvature(e, x, length, formulation.curvature)
+              - curvature(e_ref, x, length, formulation.curvature))
+        return 0.5 * bending_stiffness * dk**2 * metric(x)
+
+    ua = jnp.dot(jnp.asarray(wa), jax.vmap(axial_density)(jnp.asarray(xa) * length))
+    ub = jnp.dot(jnp.asarray(wb), jax.vmap(bending_density)(jnp.asarray(xb) * length))
+    return length * (ua + ub)

@@ -1,0 +1,56 @@
+"""Exceptions raised by ancf_jax.
+
+Every error names what went wrong in the user's terms: the parameter and its accepted
+range for bad input, the time and the reason for a failed simulation.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+
+class ModelError(ValueError):
+    """Invalid model input (a parameter out of range, an unknown name, a bad topology).
+
+    Raised while a model is being built, before anything is compiled.
+    """
+
+
+class ConstraintError(ModelError):
+    """Redundant or conflicting constraints, detected from the rank of Φ_q at assembly."""
+
+
+class StaticsError(RuntimeError):
+    """The static Newton solver did not converge.
+
+    Attributes:
+        load_step: index of the load step that failed (0-based).
+        load_factor: the load factor of that step.
+        residual: the residual norm reached.
+        state: the last converged configuration (a :class:`~ancf_jax.system.State`).
+    """
+
+    def __init__(self, message: str, *, load_step: int, load_factor: float,
+                 residual: float, state: Any = None):
+        super().__init__(message)
+        self.load_step = load_step
+        self.load_factor = load_factor
+        self.residual = residual
+        self.state = state
+
+
+class SimulationError(RuntimeError):
+    """A simulation stopped: NaN, Newton failure, constraint drift, or a sliding joint
+    that left its beam.
+
+    Attributes:
+        time: the simulation time [s] at which the failure was detected.
+        reason: a short machine-readable reason code.
+        results: the :class:`~ancf_jax.results.Results` computed up to the failure.
+    """
+
+    def __init__(self, message: str, *, time: float, reason: str, results: Any = None):
+        super().__init__(message)
+        self.time = time
+        self.reason = reason
+        self.results = results

@@ -1,0 +1,575 @@
+"""Model builder: named beams, bodies, joints and forces → an assembled :class:`System`.
+
+The thin user-facing layer over the functional core. Every entity has a unique name;
+joints and forces refer to entities by name and to points with :func:`ground`,
+:func:`body_point`, :func:`node` and :func:`beam_point`. All input is checked when it
+is added and all names are resolved in :meth:`Model.build`, before anything is traced
+or compiled; :meth:`Model.build` then checks the constraint Jacobian for redundant or
+conflicting joints and returns the system with a consistent initial state.
+
+Example (model M1 in a few lines)::
+
+    m = Model(gravity=(0.0, -9.81))
+    m.add_beam("beam", mesh.straight((0, 0), (1, 0), 0.402, 6),
+               Section.circle(1e-3, 200e9, mass_per_length=0.0025 / 0.402), alpha=0.02)
+    m.add_body("tip", mass=0.02, inertia=1.58e-6, position=(0.402, 0.0))
+    m.clamp("support", "beam", node=0)
+    m.fixed("tip_joint", node("beam", -1), body="tip")
+    system, state = m.build()
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Callable, Optional
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from . import joints as J
+from . import points as P
+from .beam import Beam
+from .bodies import RigidBodies
+from .element.strain_energy import Formulation
+from .errors import ConstraintError, ModelError
+from .forces import PointForce, PointTorque, SpringDamper
+from .mesh import BeamMesh, pad
+from .section import Section
+from .system import State, System
+from .validation import (check_choice, check_finite, check_nonnegative, check_positive,
+                         check_vector)
+
+
+# ---------------------------------------------------------------------- point references
+@dataclasses.dataclass(frozen=True)
+class PointRef:
+    """A point named by entity: resolved to a :mod:`ancf_jax.points` object at build."""
+
+    kind: str
+    target: Optional[str]
+    value: Any
+
+
+def ground(x: float, y: float) -> PointRef:
+    """A fixed ground point [m]."""
+    return PointRef("ground", None, tuple(check_vector("ground point", (x, y), 2)))
+
+
+def body_point(body: str, local=(0.0, 0.0)) -> PointRef:
+    """The point ``local`` [m] (body frame) of rigid body ``body``; default its centre."""
+    return PointRef("body", body, tuple(check_vector(f"local point of body {body!r}", local, 2)))
+
+
+def node(beam: str, index: int) -> PointRef:
+    """Node ``index`` of beam ``beam``; negative indices count from the last node (−1)."""
+    if isinstance(index, bool) or not isinstance(index, (int, np.integer)):
+        raise ModelError(f"node index of beam {beam!r} must be an integer, got {index!r}")
+    return PointRef("node", beam, int(index))
+
+
+def beam_point(beam: str, s: float) -> PointRef:
+    """The material point of beam ``beam`` at reference arc length ``s`` [m]."""
+    return PointRef("beam", beam, check_nonnegative(f"arc length s on beam {beam!r}", s, "m"))
+
+
+@dataclasses.dataclass
+class _BeamSpec:
+    mesh: BeamMesh
+    section: Section
+    alpha: float
+    beta: float
+    formulation: Formulation
+    initial_nodes: Optional[np.ndarray]
+    initial_velocities: Optional[np.ndarray]
+
+
+@dataclasses.dataclass
+class _BodySpec:
+    mass: float
+    inertia: float
+    pose: np.ndarray
+    velocity: np.ndarray
+
+
+class Model:
+    """Builder of a planar multibody system with ANCF beams (see module docstring)."""
+
+    def __init__(self, gravity=(0.0, -9.81)):
+        self.gravity = check_vector("gravity", gravity, 2)
+        self._beams: dict[str, _BeamSpec] = {}
+        self._bodies: dict[str, _BodySpec] = {}
+        self._sliders: dict[str, dict] = {}
+        self._joints: list[tuple[str, str, dict]] = []
+        self._forces: list[tuple[str, str, dict]] = []
+        self._names: set[str] = set()
+
+    # ------------------------------------------------------------------ entities
+    def _claim(self, name: str, what: str) -> None:
+        if not isinstance(name, str) or not name:
+            raise ModelError(f"{what} name must be a non-empty string, got {name!r}")
+        if name in self._names:
+            raise ModelError(f"duplicate name {name!r}: names of beams, bodies, joints and "
+                             "forces must be unique")
+        self._names.add(name)
+
+    def add_beam(self, name: str, mesh: BeamMesh, section: Section, *, alpha=0.0, beta=0.0,
+                 formulation: Formulation | None = None, initial_nodes=None,
+                 initial_velocities=None) -> str:
+        """Add a beam.
+
+        Args:
+            name: unique name.
+            mesh: reference (stress-free) geometry, from :mod:`ancf_jax.mesh`.
+            section: cross-section and material.
+            alpha, beta: Rayleigh damping coefficients (Eq. 11) [1/s, s], >= 0.
+            formulation: strain measures and quadrature (default :class:`Formulation`).
+            initial_nodes: initial nodal coordinates (n + 1, 4); default the reference.
+            initial_velocities: initial nodal velocities (n + 1, 4); default zero.
+        """
+        if not isinstance(mesh, BeamMesh):
+            raise ModelError(f"mesh of beam {name!r} must be a BeamMesh (see ancf_jax.mesh)")
+        if not isinstance(section, Section):
+            raise ModelError(f"section of beam {name!r} must be a Section")
+        n = int(mesh.n_elements)
+        shape = (n + 1, 4)
+        nodes0 = None if initial_nodes is None else check_finite(f"initial_nodes of beam {name!r}", initial_nodes)
+        vel0 = None if initial_velocities is None else check_finite(
+            f"initial_velocities of beam {name!r}", initial_velocities)
+        for label, arr in (("initial_nodes", nodes0), ("initial_velocities", vel0)):
+            if arr is not None and arr.shape != shape:
+                raise ModelError(f"{label} of beam {name!r} must have shape {shape}, got {arr.shape}")
+        alpha = check_nonnegative(f"alpha of beam {name!r}", alpha, "1/s")
+        beta = check_nonnegative(f"beta of beam {name!r}", beta, "s")
+        self._claim(name, "beam")
+        self._beams[name] = _BeamSpec(mesh, section, alpha, beta, formulation or Formulation(),
+                                      nodes0, vel0)
+        return name
+
+    def add_body(self, name: str, *, mass, inertia, position=(0.0, 0.0), angle=0.0,
+                 velocity=(0.0, 0.0), angular_velocity=0.0) -> str:
+        """Add a rigid body (paper Eq. 14: coordinates x, y, θ).
+
+        Args:
+            mass: m [kg] > 0; inertia: J about the centre [kg·m²] > 0.
+            position: centre [m]; angle: θ [rad]; velocity [m/s]; angular_velocity [rad/s].
+        """
+        m = check_positive(f"mass of body {name!r}", mass, "kg")
+        j = check_positive(f"inertia of body {name!r}", inertia, "kg*m^2")
+        pose = np.concatenate([check_vector(f"position of body {name!r}", position, 2),
+                               [check_finite(f"angle of body {name!r}", angle).item()]])
+        vel = np.concatenate([check_vector(f"velocity of body {name!r}", velocity, 2),
+                              [check_finite(f"angular_velocity of body {name!r}", angular_velocity).item()]])
+        self._claim(name, "body")
+        self._bodies[name] = _BodySpec(m, j, pose, vel)
+        return name
+
+    # ------------------------------------------------------------------ joints
+    def clamp(self, name: str, beam: str, node: int = 0, *, mode: str = "full") -> str:
+        """Clamp a beam node to the ground at its initial position and slope.
+
+        ``mode="full"`` fixes the slope vector (4 equations), ``"direction"`` only its
+        direction (3 equations).
+        """
+        check_choice(f"mode of clamp {name!r}", mode, ("full", "direction"))
+        self._claim(name, "joint")
+        self._joints.append(("clamp", name, dict(beam=beam, node=node, mode=mode)))
+        return name
+
+    def pin(self, name: str, point: PointRef, location=None) -> str:
+        """Pin a point to the ground (position fixed, rotation free) at ``location``
+        (default: the point's initial position)."""
+        loc = None if location is None else tuple(check_vector(f"location of pin {name!r}", location, 2))
+        self._claim(name, "joint")
+        self._joints.append(("pin", name, dict(point=point, location=loc)))
+        return name
+
+    def revolute(self, name: str, a: PointRef, b: PointRef) -> str:
+        """Revolute joint: two points of bodies/beams coincide, rotation free."""
+        self._claim(name, "joint")
+        self._joints.append(("revolute", name, dict(a=a, b=b)))
+        return name
+
+    def fixed(self, name: str, point: PointRef, body: str, local=None) -> str:
+        """Fixed joint of a beam node (or body point) to rigid body ``body``.
+
+        The body point ``local`` (default: where ``point`` initially is, in the body
+        frame) stays at ``point`` and the body rotates with the beam slope there.
+        """
+        loc = None if local is None else tuple(check_vector(f"local point of joint {name!r}", local, 2))
+        self._claim(name, "joint")
+        self._joints.append(("fixed", name, dict(point=point, body=body, local=loc)))
+        return name
+
+    def slider(self, name: str, body: str, beam: str, s: float, *, local=(0.0, 0.0),
+               hold: bool = False, rate: float = 0.0) -> str:
+        """Sliding joint (paper §4): the body point ``local`` stays on beam ``beam`` at
+        the sliding coordinate named ``name``, initially at arc length ``s`` [m] with
+        rate ``rate`` [m/s]. ``hold=True`` adds the constraint ``s = s₀`` (named
+        ``"<name>.hold"``), released by :meth:`System` rebuilds with ``hold=False``.
+        """
+        s0 = check_nonnegative(f"initial arc length s of sliding joint {name!r}", s, "m")
+        lp = tuple(check_vector(f"local point of sliding joint {name!r}", local, 2))
+        rate = float(check_finite(f"rate of sliding joint {name!r}", rate))
+        self._claim(name, "joint")
+        self._sliders[name] = dict(body=body, beam=beam, s=s0, local=lp, hold=bool(hold), rate=rate)
+        return name
+
+    def prescribe_point(self, name: str, point: PointRef, function: Callable) -> str:
+        """The point follows ``function(t) -> (x, y)`` [m] (JAX-traceable)."""
+        if not callable(function):
+            raise ModelError(f"function of prescribed motion {name!r} must be callable")
+        self._claim(name, "joint")
+        self._joints.append(("prescribe_point", name, dict(point=point, function=function)))
+        return name
+
+    def prescribe_body(self, name: str, body: str, coordinate: str, function: Callable) -> str:
+        """Coordinate ``"x"``, ``"y"`` or ``"theta"`` of a body follows ``function(t)``."""
+        check_choice(f"coordinate of prescribed motion {name!r}", coordinate, ("x", "y", "theta"))
+        if not callable(function):
+            raise ModelError(f"function of prescribed motion {name!r} must be callable")
+        self._claim(name, "joint")
+        self._joints.append(("prescribe_body", name, dict(body=body, coordinate=coordinate,
+                                                          function=function)))
+        return name
+
+    # ------------------------------------------------------------------ forces
+    def point_force(self, name: str, point: PointRef, force, time_function=None) -> str:
+        """A force [N] at a point, optionally scaled by ``time_function(t)``."""
+        f = tuple(check_vector(f"force of {name!r}", force, 2))
+        if time_function is not None and not callable(time_function):
+            raise ModelError(f"time_function of force {name!r} must be callable")
+        self._claim(name, "force")
+        self._forces.append(("point_force", name, dict(point=point, force=f, time_function=time_function)))
+        return name
+
+    def torque(self, name: str, body: str, torque: float, time_function=None) -> str:
+        """A torque [N·m] on a body, optionally scaled by ``time_function(t)``."""
+        tau = float(check_finite(f"torque of {name!r}", torque))
+        self._claim(name, "force")
+        self._forces.append(("torque", name, dict(body=body, torque=tau, time_function=time_function)))
+        return name
+
+    def spring_damper(self, name: str, a: PointRef, b: PointRef, *, stiffness, damping=0.0,
+                      rest_length=None) -> str:
+        """Linear spring-damper between two points; rest length defaults to the
+        initial distance."""
+        k = check_nonnegative(f"stiffness of {name!r}", stiffness, "N/m")
+        c = check_nonnegative(f"damping of {name!r}", damping, "N*s/m")
+        l0 = None if rest_length is None else check_nonnegative(f"rest_length of {name!r}", rest_length, "m")
+        self._claim(name, "force")
+        self._forces.append(("spring_damper", name, dict(a=a, b=b, stiffness=k, damping=c, rest_length=l0)))
+        return name
+
+    # ------------------------------------------------------------------ names
+    @property
+    def beam_names(self) -> tuple[str, ...]:
+        return tuple(self._beams)
+
+    @property
+    def body_names(self) -> tuple[str, ...]:
+        return tuple(self._bodies)
+
+    @property
+    def slider_names(self) -> tuple[str, ...]:
+        return tuple(self._sliders)
+
+    # ------------------------------------------------------------------ build
+    def _beam_length(self, name: str) -> float:
+        mesh = self._beams[name].mesh
+        n = int(mesh.n_elements)
+        return float(np.asarray(mesh.element_lengths)[:n].sum())
+
+    def _check_references(self) -> None:
+        """Check every name, node index and arc length with host data only (no JAX)."""
+        beams, bodies = list(self._beams), list(self._bodies)
+
+        def beam(name, what):
+            if name not in self._beams:
+                known = ", ".join(map(repr, beams)) or "none"
+                raise ModelError(f"{what} refers to beam {name!r}, which does not exist (beams: {known})")
+
+        def body(name, what):
+            if name not in self._bodies:
+                known = ", ".join(map(repr, bodies)) or "none"
+                raise ModelError(f"{what} refers to body {name!r}, which does not exist (bodies: {known})")
+
+        def node_ok(name, index, what):
+            beam(name, what)
+            n = int(self._beams[name].mesh.n_elements)
+            i = index if index >= 0 else n + 1 + index
+            if not 0 <= i <= n:
+                raise ModelError(f"{what}: node {index} of beam {name!r} is out of range "
+                                 f"(the beam has nodes 0..{n}, or -1..{-(n + 1)})")
+
+        def arc_ok(name, s, what, label="arc length"):
+            length = self._beam_length(name)
+            if not 0.0 <= s <= length:
+                raise ModelError(f"{what}: {label} {s} is outside beam {name!r} "
+                                 f"(accepted 0..{length:g} m)")
+
+        def point(ref, what):
+            if not isinstance(ref, PointRef):
+                raise ModelError(f"{what}: a point must be given with ground(), body_point(), "
+                                 f"node() or beam_point(), got {ref!r}")
+            if ref.kind == "body":
+                body(ref.target, what)
+            elif ref.kind == "node":
+                node_ok(ref.target, ref.value, what)
+            elif ref.kind == "beam":
+                beam(ref.target, what)
+                arc_ok(ref.target, ref.value, what)
+
+        for kind, name, a in self._joints:
+            what = f"joint {name!r}"
+            if kind == "clamp":
+                node_ok(a["beam"], a["node"], what)
+            if kind == "fixed" or kind == "prescribe_body":
+                body(a["body"], what)
+            for key in ("point", "a", "b"):
+                if key in a:
+                    point(a[key], what)
+        for name, a in self._sliders.items():
+            what = f"sliding joint {name!r}"
+            body(a["body"], what)
+            beam(a["beam"], what)
+            arc_ok(a["beam"], a["s"], what, "initial arc length s =")
+        for kind, name, a in self._forces:
+            what = f"force {name!r}"
+            if kind == "torque":
+                body(a["body"], what)
+            for key in ("point", "a", "b"):
+                if key in a:
+                    point(a[key], what)
+
+    def build(self, *, pad_to: dict | int | None = None, hold: bool | None = None,
+              assemble: bool = True, tolerance: float = 1e-10) -> tuple[System, State]:
+        """Resolve names, check the constraints and return ``(system, initial_state)``.
+
+        Args:
+            pad_to: pad beams to this many element slots (one int for all beams or a
+                dict beam name → n_max), so systems of different element counts batch.
+            hold: override the ``hold`` flag of every sliding joint (None: as added).
+            assemble: project the initial state onto Φ = 0 and Φ̇ = 0.
+            tolerance: constraint residual accepted without projection [m].
+
+        Raises:
+            ModelError: unknown names, points outside a beam, bad indices.
+            ConstraintError: redundant or conflicting joints.
+        """
+        self._check_references()
+        beam_names = list(self._beams)
+        body_names = list(self._bodies)
+        slider_names = list(self._sliders)
+        beam_index = {n: i for i, n in enumerate(beam_names)}
+        body_index = {n: i for i, n in enumerate(body_names)}
+
+        # ---- beams (padding) and initial beam state
+        beams, nodes0, vel0 = [], [], []
+        for name in beam_names:
+            spec = self._beams[name]
+            mesh = spec.mesh
+            n = int(mesh.n_elements)
+            if pad_to is not None:
+                target = pad_to.get(name) if isinstance(pad_to, dict) else pad_to
+                if target is not None:
+                    if int(target) < n:
+                        raise ModelError(f"pad_to for beam {name!r} must be >= its {n} elements, got {target}")
+                    mesh = pad(mesh, int(target))
+            beams.append(Beam(mesh, spec.section, alpha=spec.alpha, beta=spec.beta,
+                              formulation=spec.formulation))
+            ref = np.asarray(mesh.reference_nodes)
+            x0 = ref.copy()
+            if spec.initial_nodes is not None:
+                x0[: n + 1] = spec.initial_nodes
+            v0 = np.zeros_like(ref)
+            if spec.initial_velocities is not None:
+                v0[: n + 1] = spec.initial_velocities
+            nodes0.append(x0)
+            vel0.append(v0)
+
+        # names, indices and arc lengths were checked by _check_references
+        def beam_of(name, what=None):
+            return beam_index[name]
+
+        def body_of(name, what=None):
+            return body_index[name]
+
+        def node_index(beam_name, index, what=None):
+            n = int(self._beams[beam_name].mesh.n_elements)
+            return beam_index[beam_name], (index if index >= 0 else n + 1 + index)
+
+        def resolve(ref: PointRef, what=None):
+            if ref.kind == "ground":
+                return P.GroundPoint(jnp.asarray(ref.value, float))
+            if ref.kind == "body":
+                return P.BodyPoint(body_index[ref.target], jnp.asarray(ref.value, float))
+            if ref.kind == "node":
+                b, i = node_index(ref.target, ref.value)
+                return P.BeamNode(b, jnp.asarray(i, jnp.int32))
+            return P.BeamPoint(beam_index[ref.target], jnp.asarray(ref.value, float))
+
+        # ---- bodies and sliding coordinates
+        poses = np.array([self._bodies[n].pose for n in body_names]).reshape(-1, 3)
+        body_vel = np.array([self._bodies[n].velocity for n in body_names]).reshape(-1, 3)
+        bodies = RigidBodies(jnp.asarray([self._bodies[n].mass for n in body_names], float).reshape(-1),
+                             jnp.asarray([self._bodies[n].inertia for n in body_names], float).reshape(-1))
+        s0 = np.array([self._sliders[n]["s"] for n in slider_names], float)
+        s_rate = np.array([self._sliders[n]["rate"] for n in slider_names], float)
+
+        skeleton = System(bodies, tuple(beams), (), (), jnp.asarray(self.gravity, float),
+                          n_sliding=len(slider_names), body_names=tuple(body_names),
+                          beam_names=tuple(beam_names), sliding_names=tuple(slider_names))
+        q0 = np.asarray(skeleton.pack(poses, nodes0, s0))
+
+        def initial_position(pt):
+            return np.asarray(pt.position(skeleton, jnp.asarray(q0)))
+
+        def initial_direction(pt):
+            return np.asarray(pt.direction(skeleton, jnp.asarray(q0)))
+
+        # ---- constraints
+        constraints = []
+        for kind, name, a in self._joints:
+            what = f"joint {name!r}"
+            if kind == "clamp":
+                b, i = node_index(a["beam"], a["node"], what)
+                pt = P.BeamNode(b, jnp.asarray(i, jnp.int32))
+                d = initial_direction(pt)
+                slope = d if a["mode"] == "full" else d / np.linalg.norm(d)
+                constraints.append(J.Clamp(name, pt, jnp.asarray(initial_position(pt)),
+                                           jnp.asarray(slope), mode=a["mode"]))
+            elif kind == "pin":
+                pt = resolve(a["point"], what)
+                loc = initial_position(pt) if a["location"] is None else np.asarray(a["location"])
+                constraints.append(J.Coincident(name, pt, P.GroundPoint(jnp.asarray(loc, float))))
+            elif kind == "revolute":
+                constraints.append(J.Coincident(name, resolve(a["a"], what), resolve(a["b"], what)))
+            elif kind == "fixed":
+                pt = resolve(a["point"], what)
+                k = body_of(a["body"], what)
+                pose = poses[k]
+                c, s = np.cos(pose[2]), np.sin(pose[2])
+                rot_t = np.array([[c, s], [-s, c]])
+                local = (rot_t @ (initial_position(pt) - pose[:2]) if a["local"] is None
+                         else np.asarray(a["local"]))
+                d = initial_direction(pt)
+                u0 = rot_t @ (d / np.linalg.norm(d))
+                constraints.append(J.FixedJoint(name, pt, P.BodyPoint(k, jnp.asarray(local, float)),
+                                                jnp.asarray(u0, float)))
+            elif kind == "prescribe_point":
+                constraints.append(J.PrescribedPoint(name, resolve(a["point"], what), a["function"]))
+            elif kind == "prescribe_body":
+                k = body_of(a["body"], what)
+                idx = 3 * k + {"x": 0, "y": 1, "theta": 2}[a["coordinate"]]
+                constraints.append(J.PrescribedCoordinate(name, idx, a["function"]))
+        for j, name in enumerate(slider_names):
+            a = self._sliders[name]
+            what = f"sliding joint {name!r}"
+            k = body_of(a["body"], what)
+            b = beam_of(a["beam"], what)
+            constraints.append(J.SlidingJoint(name, b, j, P.BodyPoint(k, jnp.asarray(a["local"], float))))
+            if (a["hold"] if hold is None else hold):
+                constraints.append(J.SlidingHold(f"{name}.hold", j, jnp.asarray(a["s"], float)))
+
+        # ---- forces
+        forces = []
+        for kind, name, a in self._forces:
+            what = f"force {name!r}"
+            if kind == "point_force":
+                forces.append(PointForce(name, resolve(a["point"], what), jnp.asarray(a["force"], float),
+                                         a["time_function"]))
+            elif kind == "torque":
+                forces.append(PointTorque(name, body_of(a["body"], what), jnp.asarray(a["torque"], float),
+                                          a["time_function"]))
+            elif kind == "spring_damper":
+                pa, pb = resolve(a["a"], what), resolve(a["b"], what)
+                l0 = a["rest_length"]
+                if l0 is None:
+                    l0 = float(np.linalg.norm(initial_position(pa) - initial_position(pb)))
+                forces.append(SpringDamper(name, pa, pb, jnp.asarray(a["stiffness"], float),
+                                           jnp.asarray(a["damping"], float), jnp.asarray(l0, float)))
+
+        system = System(bodies, tuple(beams), tuple(constraints), tuple(forces),
+                        jnp.asarray(self.gravity, float), n_sliding=len(slider_names),
+                        body_names=tuple(body_names), beam_names=tuple(beam_names),
+                        sliding_names=tuple(slider_names))
+        v0 = np.asarray(system.pack(body_vel, vel0, s_rate))
+        state = State(jnp.asarray(q0), jnp.asarray(v0), jnp.zeros(()))
+        if assemble:
+            state = assemble_state(system, state, tolerance=tolerance)
+        return system, state
+
+
+# ---------------------------------------------------------------------- assembly checks
+def _jitted(system):
+    return (jax.jit(lambda sys, q, t: sys.constraint(q, t)),
+            jax.jit(lambda sys, q, t: sys.constraint_jacobian(q, t)),
+            jax.jit(lambda sys, q, t: sys.constraint_time_derivative(q, t)))
+
+
+def check_constraint_rank(system: System, q, t=0.0, *, rtol: float = 1e-9) -> None:
+    """Raise :class:`ConstraintError` if Φ_q(q) is rank deficient, naming the joints
+    whose equations are linearly dependent."""
+    if system.n_constraints == 0:
+        return
+    _, jac_fn, _ = _jitted(system)
+    jac = np.asarray(jac_fn(system, jnp.asarray(q), jnp.asarray(t, float)))
+    u, sv, _ = np.linalg.svd(jac)
+    scale = sv[0] if sv.size else 1.0
+    rank = int(np.sum(sv > rtol * max(scale, 1e-300)))
+    m = jac.shape[0]
+    if rank < m:
+        null = u[:, rank:]  # left null space: combinations of dependent equations
+        owners = system.constraint_owner()
+        labels = system.constraint_labels()
+        involved_eq = [labels[i] for i in range(m) if np.max(np.abs(null[i])) > 1e-6]
+        involved = sorted({owners[i] for i in range(m) if np.max(np.abs(null[i])) > 1e-6},
+                          key=owners.index)
+        raise ConstraintError(
+            f"redundant constraints: {m - rank} of the {m} constraint equations are linearly "
+            f"dependent (rank of Phi_q is {rank}); joints involved: {', '.join(involved)} "
+            f"(equations {', '.join(involved_eq)}). Remove one of them or use a joint with "
+            "fewer equations (e.g. clamp mode='direction').")
+
+
+def assemble_state(system: System, state: State, *, tolerance: float = 1e-10,
+                   max_iterations: int = 50) -> State:
+    """Project an initial state onto Φ(q, t) = 0 and Φ̇ = 0 (minimum-norm correction),
+    after checking the rank of Φ_q.
+
+    Raises:
+        ConstraintError: redundant joints, or joints that cannot be satisfied together
+            (conflicting), naming those with the largest residuals.
+    """
+    phi_fn, jac_fn, phit_fn = _jitted(system)
+    t = jnp.asarray(state.t, float)
+    q = np.array(state.q, float)
+    check_constraint_rank(system, q, t)
+    if system.n_constraints == 0:
+        return state
+    owners = system.constraint_owner()
+    free = ~np.asarray(system.inactive_mask())
+    for _ in range(max_iterations):
+        phi = np.asarray(phi_fn(system, jnp.asarray(q), t))
+        if np.max(np.abs(phi)) <= tolerance:
+            break
+        jac = np.asarray(jac_fn(system, jnp.asarray(q), t))[:, free]
+        dq = np.linalg.lstsq(jac, -phi, rcond=None)[0]
+        q[free] += dq
+    else:
+        phi = np.asarray(phi_fn(system, jnp.asarray(q), t))
+        worst = np.argsort(-np.abs(phi))[:4]
+        names = sorted({owners[i] for i in worst if abs(phi[i]) > tolerance}, key=owners.index)
+        raise ConstraintError(
+            f"conflicting constraints: the joints cannot all be satisfied (largest residual "
+            f"{np.max(np.abs(phi)):.3g}); joints involved: {', '.join(names)}")
+    phi = np.asarray(phi_fn(system, jnp.asarray(q), t))
+    if not np.all(np.isfinite(phi)) or np.max(np.abs(phi)) > 1e3 * tolerance + 1e-9:
+        raise ConstraintError("conflicting constraints: projection did not converge")
+    check_constraint_rank(system, q, t)
+    jac = np.asarray(jac_fn(system, jnp.asarray(q), t))
+    v = np.array(state.v, float)
+    rhs = -(jac @ v + np.asarray(phit_fn(system, jnp.asarray(q), t)))
+    v[free] += np.linalg.lstsq(jac[:, free], rhs, rcond=None)[0]
+    return State(jnp.asarray(q), jnp.asarray(v), state.t)

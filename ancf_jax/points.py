@@ -1,0 +1,92 @@
+"""Points of a system that joints and forces attach to.
+
+A point maps the system coordinates q to a global position r(q, t) [m]; its velocity,
+acceleration and Jacobian follow by automatic differentiation. Points of beams are
+addressed by node index or by reference arc length; the element containing an arc
+length is found inside traced code, so a point can move across nodes.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+
+from .bodies import body_point, rotation
+
+
+class AbstractPoint(eqx.Module):
+    """A point with a position r(q) [m], shape (2,)."""
+
+    def position(self, system, q):
+        raise NotImplementedError
+
+    def direction(self, system, q):
+        """A material direction attached to the point (body axis or beam slope), shape (2,)."""
+        raise NotImplementedError
+
+
+class GroundPoint(AbstractPoint):
+    """A fixed point of the ground."""
+
+    location: jnp.ndarray
+
+    def position(self, system, q):
+        return self.location
+
+    def direction(self, system, q):
+        return jnp.array([1.0, 0.0])
+
+
+class BodyPoint(AbstractPoint):
+    """A point fixed in rigid body ``body`` at ``local`` (body frame) [m]."""
+
+    body: int = eqx.field(static=True)
+    local: jnp.ndarray
+
+    def position(self, system, q):
+        return body_point(system.body_pose(q, self.body), self.local)
+
+    def direction(self, system, q):
+        return rotation(system.body_pose(q, self.body)[2])[:, 0]
+
+
+class BeamNode(AbstractPoint):
+    """Node ``node`` of beam ``beam`` (node index is data, so it can be batched)."""
+
+    beam: int = eqx.field(static=True)
+    node: jnp.ndarray
+
+    def position(self, system, q):
+        return system.beam_nodes(q, self.beam)[self.node, :2]
+
+    def direction(self, system, q):
+        """The nodal slope r' (not normalized)."""
+        return system.beam_nodes(q, self.beam)[self.node, 2:]
+
+
+class BeamPoint(AbstractPoint):
+    """The material point of beam ``beam`` at fixed reference arc length ``s`` [m]."""
+
+    beam: int = eqx.field(static=True)
+    s: jnp.ndarray
+
+    def position(self, system, q):
+        return system.beams[self.beam].position(system.beam_nodes(q, self.beam), self.s)
+
+    def direction(self, system, q):
+        return system.beams[self.beam].slope(system.beam_nodes(q, self.beam), self.s)
+
+
+class SlidingPoint(AbstractPoint):
+    """The point of beam ``beam`` at the current sliding coordinate ``sliding`` (Eq. 19)."""
+
+    beam: int = eqx.field(static=True)
+    sliding: int = eqx.field(static=True)
+
+    def position(self, system, q):
+        return system.beams[self.beam].position(system.beam_nodes(q, self.beam),
+                                                system.sliding(q, self.sliding))
+
+    def direction(self, system, q):
+        return system.beams[self.beam].slope(system.beam_nodes(q, self.beam),
+                                             system.sliding(q, self.sliding))

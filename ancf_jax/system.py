@@ -1,0 +1,269 @@
+"""The assembled multibody system: coordinates, mass, forces, constraints, energy.
+
+System coordinates (paper Eqs. 14 and 21)::
+
+    q = [ x₁ y₁ θ₁ … x_nb y_nb θ_nb | nodes of beam 1 | … | nodes of beam nB | s₁ … s_ns ]
+
+rigid-body coordinates first, then the ANCF coordinates of every beam (4 per node,
+n_max + 1 node slots per beam), then the sliding coordinates. The mass matrix is block
+diagonal: diag(m, m, J) per body, the consistent beam mass (block tridiagonal), and
+zero for the sliding coordinates, which carry neither mass nor force.
+
+The equations of motion are M q̈ + Φ_qᵀ λ = Q(q, q̇, t), Φ(q, t) = 0. Here Q holds the
+elastic forces (−∂U/∂q, Eq. 9), gravity, applied loads and the damping forces
+(Rayleigh C = αM + βK per beam, Eq. 11, with β K q̇ evaluated as one Jacobian-vector
+product of the elastic force). Φ_q and γ (Eq. 12) come from automatic differentiation
+of the joint residuals.
+
+A :class:`System` is an ``equinox.Module``: ``jit``, ``vmap`` and ``grad`` pass through
+it. Everything a batch may vary (lengths, masses, α, β, node indices) is array data;
+the structure (counts, offsets, names) is static.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .beam import Beam
+from .bodies import RigidBodies
+from .linalg import BlockTridiagonal
+
+
+class State(eqx.Module):
+    """Positions q, velocities v = q̇ and time t of a system."""
+
+    q: jnp.ndarray
+    v: jnp.ndarray
+    t: jnp.ndarray
+
+
+class System(eqx.Module):
+    """An assembled planar multibody system with ANCF beams.
+
+    Attributes:
+        bodies: masses and inertias of the rigid bodies.
+        beams: the beams, in coordinate order.
+        constraints: the joints (Φ(q, t) = 0).
+        forces: force elements added by the user.
+        gravity: acceleration of gravity [m/s²], shape (2,).
+        n_sliding: number of sliding coordinates (static).
+        body_names, beam_names, sliding_names: names for messages and outputs (static).
+    """
+
+    bodies: RigidBodies
+    beams: tuple
+    constraints: tuple
+    forces: tuple
+    gravity: jnp.ndarray
+    n_sliding: int = eqx.field(static=True, default=0)
+    body_names: tuple = eqx.field(static=True, default=())
+    beam_names: tuple = eqx.field(static=True, default=())
+    sliding_names: tuple = eqx.field(static=True, default=())
+
+    # ------------------------------------------------------------------ layout
+    @property
+    def n_bodies(self) -> int:
+        return self.bodies.count
+
+    def body_offset(self, k: int) -> int:
+        return 3 * k
+
+    def beam_offset(self, b: int) -> int:
+        return 3 * self.n_bodies + sum(beam.n_coordinates for beam in self.beams[:b])
+
+    @property
+    def chain_size(self) -> int:
+        """Number of beam coordinates (the block-tridiagonal part)."""
+        return sum(beam.n_coordinates for beam in self.beams)
+
+    @property
+    def sliding_offset(self) -> int:
+        return 3 * self.n_bodies + self.chain_size
+
+    @property
+    def n_coordinates(self) -> int:
+        return self.sliding_offset + self.n_sliding
+
+    @property
+    def n_constraints(self) -> int:
+        return sum(c.size for c in self.constraints)
+
+    def border_indices(self) -> np.ndarray:
+        """Indices of the coordinates outside the beam chain (bodies, sliding)."""
+        return np.concatenate([np.arange(3 * self.n_bodies),
+                               np.arange(self.sliding_offset, self.n_coordinates)]).astype(int)
+
+    def chain_slice(self) -> slice:
+        return slice(3 * self.n_bodies, self.sliding_offset)
+
+    def constraint_labels(self) -> tuple[str, ...]:
+        return tuple(lbl for c in self.constraints for lbl in c.equation_labels())
+
+    def constraint_owner(self) -> tuple[str, ...]:
+        """Name of the joint each constraint equation belongs to."""
+        return tuple(c.name for c in self.constraints for _ in range(c.size))
+
+    def inactive_mask(self):
+        """True for coordinates of inactive (padding) beam nodes, shape (n,)."""
+        parts = [jnp.zeros(3 * self.n_bodies, bool)]
+        parts += [jnp.repeat(~b.mesh.active_nodes, 4) for b in self.beams]
+        parts += [jnp.zeros(self.n_sliding, bool)]
+        return jnp.concatenate(parts)
+
+    # ------------------------------------------------------------------ views of q
+    def body_pose(self, q, k: int):
+        """(x, y, θ) of body k, shape (3,)."""
+        o = self.body_offset(k)
+        return q[o:o + 3]
+
+    def beam_nodes(self, q, b: int):
+        """Nodal coordinates of beam b, shape (n_max + 1, 4)."""
+        o = self.beam_offset(b)
+        return jnp.reshape(q[o:o + self.beams[b].n_coordinates], (-1, 4))
+
+    def sliding(self, q, j: int):
+        """Sliding coordinate j [m] (reference arc length along its beam)."""
+        return q[self.sliding_offset + j]
+
+    def pack(self, body_poses, beam_nodes, sliding):
+        """Build q from per-part arrays: body_poses (nb, 3), a list of (n_nodes, 4), (ns,)."""
+        parts = [jnp.reshape(jnp.asarray(body_poses, float), (-1,))]
+        parts += [jnp.reshape(jnp.asarray(n, float), (-1,)) for n in beam_nodes]
+        parts += [jnp.reshape(jnp.asarray(sliding, float), (-1,))]
+        return jnp.concatenate(parts)
+
+    # ------------------------------------------------------------------ inertia
+    def beam_mass(self) -> BlockTridiagonal:
+        """Mass matrix of the beam chain (block tridiagonal, dummy unit mass on padding)."""
+        return BlockTridiagonal.concatenate([b.mass() for b in self.beams])
+
+    def border_mass_diagonal(self):
+        """Diagonal mass of the border coordinates (bodies: m, m, J; sliding: 0)."""
+        return jnp.concatenate([self.bodies.mass_diagonal(), jnp.zeros(self.n_sliding)])
+
+    def mass_matrix(self):
+        """Dense system mass matrix M (Eq. 14/21), shape (n, n)."""
+        n = self.n_coordinates
+        m = jnp.zeros((n, n))
+        nb3 = 3 * self.n_bodies
+        m = m.at[:nb3, :nb3].set(jnp.diag(self.bodies.mass_diagonal()))
+        if self.beams:
+            c = self.chain_slice()
+            m = m.at[c, c].set(self.beam_mass().to_dense())
+        return m
+
+    def mass_times(self, v):
+        """M v without forming M, shape (n,)."""
+        out = jnp.zeros_like(v)
+        nb3 = 3 * self.n_bodies
+        out = out.at[:nb3].set(self.bodies.mass_diagonal() * v[:nb3])
+        if self.beams:
+            c = self.chain_slice()
+            out = out.at[c].set(self.beam_mass().matvec(v[c]))
+        return out
+
+    # ------------------------------------------------------------------ energies
+    def kinetic_energy(self, v):
+        """T = ½ vᵀ M v [J]."""
+        return 0.5 * jnp.dot(v, self.mass_times(v))
+
+    def strain_energy(self, q):
+        """Σ U of all beams [J] (Eq. 8)."""
+        return sum((b.strain_energy(self.beam_nodes(q, i)) for i, b in enumerate(self.beams)),
+                   jnp.zeros(()))
+
+    def gravity_load(self):
+        """Generalized gravity force (constant), shape (n,)."""
+        parts = [jnp.reshape(self.bodies.mass[:, None] * jnp.array([1.0, 1.0, 0.0])[None, :]
+                             * jnp.concatenate([self.gravity, jnp.zeros(1)])[None, :], (-1,))]
+        parts += [jnp.reshape(b.gravity_load(self.gravity), (-1,)) for b in self.beams]
+        parts += [jnp.zeros(self.n_sliding)]
+        return jnp.concatenate(parts)
+
+    def gravity_potential(self, q):
+        """Potential of gravity −F_gᵀ q [J] (exact: the consistent load is constant)."""
+        return -jnp.dot(self.gravity_load(), q)
+
+    def force_potential(self, q, t):
+        """Potential of the conservative parts of the force elements [J]."""
+        return sum((f.potential(self, q, t) for f in self.forces), jnp.zeros(()))
+
+    def potential_energy(self, q, t=0.0, load_factor=1.0):
+        """Total potential: strain + load_factor·gravity + force elements [J]."""
+        return (self.strain_energy(q) + load_factor * self.gravity_potential(q)
+                + self.force_potential(q, t))
+
+    # ------------------------------------------------------------------ forces
+    def conservative_force(self, q, t=0.0, load_factor=1.0):
+        """−∂V/∂q of the total potential (elastic Eq. 9, gravity, springs), shape (n,)."""
+        return -jax.grad(self.potential_energy)(q, t, load_factor)
+
+    def damping_force(self, q, v):
+        """Rayleigh damping −(αM + βK) v per beam (Eq. 11) plus dampers, shape (n,).
+
+        β K v is one Jacobian-vector product of the elastic force at the current q
+        (K is the current tangent stiffness); no matrix is assembled.
+        """
+        out = jnp.zeros_like(q)
+        for i, b in enumerate(self.beams):
+            nodes, vel = self.beam_nodes(q, i), self.beam_nodes(v, i)
+            m_v = b.mass().add_diagonal(-jnp.repeat(
+                jnp.where(b.mesh.active_nodes, 0.0, 1.0), 4)).matvec(jnp.reshape(vel, (-1,)))
+            k_v = jnp.reshape(b.stiffness_product(nodes, vel), (-1,))
+            o = self.beam_offset(i)
+            out = out.at[o:o + b.n_coordinates].add(-(b.alpha * m_v + b.beta * k_v))
+        for f in self.forces:
+            out = out + f.dissipative_force(self, q, v)
+        return out
+
+    def applied_force(self, q, v, t, load_factor=1.0):
+        """Prescribed loads of the force elements, scaled by load_factor, shape (n,)."""
+        out = jnp.zeros_like(q)
+        for f in self.forces:
+            out = out + f.applied_force(self, q, v, t)
+        return load_factor * out
+
+    def generalized_force(self, q, v, t, load_factor=1.0):
+        """Q(q, v, t): all forces on the coordinates (right-hand side of Eq. 14), shape (n,)."""
+        return (self.conservative_force(q, t, load_factor) + self.damping_force(q, v)
+                + self.applied_force(q, v, t, load_factor))
+
+    # ------------------------------------------------------------------ constraints
+    def constraint(self, q, t=0.0):
+        """Φ(q, t), shape (m,)."""
+        if not self.constraints:
+            return jnp.zeros((0,), q.dtype)
+        return jnp.concatenate([c.residual(self, q, t) for c in self.constraints])
+
+    def constraint_jacobian(self, q, t=0.0):
+        """Φ_q(q, t) = ∂Φ/∂q by reverse-mode autodiff (m VJPs), shape (m, n)."""
+        if not self.constraints:
+            return jnp.zeros((0, q.shape[0]), q.dtype)
+        return jax.jacrev(self.constraint)(q, t)
+
+    def constraint_velocity(self, q, v, t=0.0):
+        """Φ̇ = Φ_q v + Φ_t, shape (m,) (one JVP)."""
+        return jax.jvp(lambda qq, tt: self.constraint(qq, tt), (q, jnp.asarray(t, q.dtype)),
+                       (v, jnp.ones((), q.dtype)))[1]
+
+    def constraint_time_derivative(self, q, t=0.0):
+        """Φ_t, shape (m,)."""
+        return jax.jvp(lambda tt: self.constraint(q, tt), (jnp.asarray(t, q.dtype),),
+                       (jnp.ones((), q.dtype),))[1]
+
+    def constraint_rhs(self, q, v, t=0.0):
+        """γ of Eq. 12: Φ_q q̈ = γ = −(Φ_q v)_q v − 2 Φ_qt v − Φ_tt, shape (m,).
+
+        Computed as minus the second derivative of τ ↦ Φ(q + τ v, t + τ) at τ = 0 by
+        nested JVPs.
+        """
+        tt = jnp.asarray(t, q.dtype)
+
+        def phi_dot(tau):
+            return jax.jvp(lambda a: self.constraint(q + a * v, tt + a), (tau,),
+                           (jnp.ones((), q.dtype),))[1]
+
+        return -jax.jvp(phi_dot, (jnp.zeros((), q.dtype),), (jnp.ones((), q.dtype),))[1]

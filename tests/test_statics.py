@@ -1,0 +1,156 @@
+"""Statics against closed-form answers: the large-deflection elastica (Bisshopp &
+Drucker 1945) and the elastic catenary (Irvine 1981)."""
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+from ancf_jax import StaticsError, mesh
+from ancf_jax.element import Formulation
+from ancf_jax.model import Model, node
+from ancf_jax.section import Section
+from ancf_jax.statics import solve_static
+
+LOADS = [0.5, 1.0, 2.0, 5.0, 10.0]  # PL²/EI
+
+
+def elastica_tip(k):
+    """Tip (x/L, y/L) of an inextensible cantilever under a dead tip load with
+    PL²/EI = k: θ'' = k cos θ on [0, 1], θ(0) = 0, θ'(1) = 0 (shooting)."""
+    def shoot(c, full=False):
+        sol = solve_ivp(lambda s, y: [y[1], k * np.cos(y[0]), np.cos(y[0]), np.sin(y[0])],
+                        (0.0, 1.0), [0.0, c, 0.0, 0.0], rtol=1e-12, atol=1e-13)
+        return sol.y[:, -1] if full else sol.y[1, -1]
+    c = brentq(shoot, -k - 1.0, 0.0, xtol=1e-15)
+    y = shoot(c, full=True)
+    return y[2], y[3]
+
+
+def test_elastica_reference_matches_bisshopp_drucker_table():
+    """Our scipy elastica reproduces the published table (PL²/EI = 1, 10)."""
+    x, y = elastica_tip(1.0)
+    assert abs((1 - x) - 0.05643) < 2e-5 and abs(-y - 0.30172) < 2e-5
+    x, y = elastica_tip(10.0)
+    assert abs((1 - x) - 0.55500) < 5e-5 and abs(-y - 0.81061) < 5e-5
+
+
+def cantilever(n, formulation=None):
+    """L = 1, EI = 1, EA = 1e7 (extension ~1e-6: negligible against 1e-4), no gravity."""
+    m = Model(gravity=(0.0, 0.0))
+    m.add_beam("beam", mesh.straight((0, 0), (1, 0), 1.0, n), Section(1e7, 1.0, 1e-7, 1.0),
+               formulation=formulation)
+    m.clamp("support", "beam", 0)
+    m.point_force("load", node("beam", -1), (0.0, -1.0))
+    return m.build()
+
+
+def solve_tip(system, state, k):
+    """Tip displacement for PL²/EI = k; the load is array data, so one compile serves all k."""
+    import equinox as eqx
+    f = system.forces[0]
+    sys_k = eqx.tree_at(lambda s: s.forces[0].force, system, jnp.array([0.0, -k]))
+    sol = solve_static(sys_k, state, load_steps=5)  # same shapes for every k: one compile
+    tip = np.asarray(sys_k.beam_nodes(sol.state.q, 0)[-1, :2])
+    return tip
+
+
+@pytest.fixture(scope="module")
+def elastica_results():
+    refs = {k: np.array(elastica_tip(k)) for k in LOADS}
+    out = {}
+    for n in (2, 4, 8, 16):
+        system, state = cantilever(n)
+        out[n] = {k: solve_tip(system, state, k) for k in LOADS}
+    return refs, out
+
+
+@pytest.mark.parametrize("k", LOADS)
+def test_elastica_16_elements_within_1e4(elastica_results, k):
+    refs, out = elastica_results
+    ref = refs[k]
+    err = np.linalg.norm(out[16][k] - ref) / np.linalg.norm(ref - [1.0, 0.0])
+    assert err < 1e-4, f"PL²/EI={k}: relative tip error {err:.2e}"
+
+
+def test_elastica_convergence_rate(elastica_results):
+    """Observed order of convergence of the tip displacement in the element count.
+
+    Cubic Hermite elements converge at O(h⁴) in displacement for smooth solutions; the
+    observed rate between 8 and 16 elements must be at least 3.5 for every load.
+    """
+    refs, out = elastica_results
+    for k in LOADS:
+        errs = [np.linalg.norm(out[n][k] - refs[k]) for n in (2, 4, 8, 16)]
+        rates = np.log2(np.array(errs[:-1]) / np.array(errs[1:]))
+        assert rates[-1] > 3.5, f"PL²/EI={k}: errors {errs}, rates {rates}"
+
+
+# ---------------------------------------------------------------------------- catenary
+SPAN, L0, W, EA = 3.8, 4.02, 0.36, 60.0   # soft cable: ~1 % stretch, so extensibility shows
+
+
+def elastic_catenary(s, h):
+    """Position of the material point s of a symmetric elastic catenary (Irvine 1981)
+    with Hooke's law T = EA ε, weight W per unstretched length, horizontal tension h."""
+    u = W * (s - L0 / 2) / h
+    u0 = W * L0 / (2 * h)
+    x = h * s / EA + h / W * (np.arcsinh(u) + np.arcsinh(u0))
+    y = W * (s**2 - L0 * s) / (2 * EA) + h / W * (np.sqrt(1 + u**2) - np.sqrt(1 + u0**2))
+    return x, y
+
+
+@pytest.fixture(scope="module")
+def catenary():
+    h = brentq(lambda h: elastic_catenary(L0, h)[0] - SPAN, 1e-3, 1e3, xtol=1e-14)
+    out = {}
+    for n in (8, 16):
+        m = Model(gravity=(0.0, -9.81))
+        # engineering strain |r'| − 1 is Hooke's law of the elastic catenary; EI → 0
+        sec = Section(EA, 1.0, 1e-9, W / 9.81)
+        m.add_beam("cable", mesh.straight((0, 0), (1, 0), L0, n), sec,
+                   formulation=Formulation(axial_strain="engineering"),
+                   initial_nodes=mesh.catenary_nodes((0, 0), (SPAN, 0), L0, n))
+        m.pin("A", node("cable", 0))
+        m.pin("B", node("cable", -1))
+        system, state = m.build()
+        sol = solve_static(system, state, load_steps=2)
+        nodes = np.asarray(system.beam_nodes(sol.state.q, 0))
+        s_nodes = np.asarray(system.beams[0].mesh.node_arc_lengths)
+        out[n] = (nodes, s_nodes, np.asarray(sol.multipliers))
+    return h, out
+
+
+def test_hanging_cable_matches_elastic_catenary(catenary):
+    h, out = catenary
+    for n, tol in ((8, 2e-4), (16, 2e-5)):
+        nodes, s, _ = out[n]
+        x, y = elastic_catenary(s, h)
+        err = np.max(np.hypot(nodes[:, 0] - x, nodes[:, 1] - y))
+        assert err < tol, f"{n} elements: max node distance {err:.2e} m"
+    # the stretch is visible: the inextensible sag would be off by far more
+    nodes, s, lam = out[16]
+    sag = -nodes[len(s) // 2, 1]
+    sag_inext = -elastic_catenary(L0 / 2, brentq(lambda hh: elastic_catenary(L0, hh)[0] - SPAN, 1e-3, 1e3))[1]
+    assert abs(sag - sag_inext) < 2e-5
+    x_inext = mesh.catenary_nodes((0, 0), (SPAN, 0), L0, 16)
+    assert np.max(np.abs(x_inext[:, 1] - nodes[:, 1])) > 1e-2
+
+
+def test_hanging_cable_support_reactions(catenary):
+    """The pin multipliers are the support reactions: horizontal H and half the weight."""
+    h, out = catenary
+    _, _, lam = out[16]
+    # residual of pin A is r_A − a, so its multiplier is minus the force of the support
+    assert abs(abs(lam[0]) - h) < 1e-4 * h
+    np.testing.assert_allclose(abs(lam[1]) + abs(lam[3]), W * L0, rtol=1e-9)
+
+
+def test_failure_names_the_load_step():
+    system, state = cantilever(4)
+    import equinox as eqx
+    sys_k = eqx.tree_at(lambda s: s.forces[0].force, system, jnp.array([0.0, -10.0]))
+    with pytest.raises(StaticsError, match=r"load step 1 of 2 \(load factor 0.5\).*residual") as err:
+        solve_static(sys_k, state, load_steps=2, max_iterations=2)
+    assert err.value.load_step == 0 and err.value.residual > 0
