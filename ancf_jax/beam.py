@@ -16,7 +16,7 @@ import jax
 import jax.numpy as jnp
 
 from .element import mass as element_mass
-from .element import shape_functions as sf
+from .element.shape_functions import position as _position, slope as _slope
 from .element.strain_energy import Formulation, strain_energy
 from .element.stress import bending_stress
 from .errors import ModelError
@@ -141,12 +141,12 @@ class Beam(eqx.Module):
     def position(self, nodes, s):
         """Position [m] of the point at reference arc length s, shape (2,)."""
         e, x, l, _ = self.element_at(nodes, s)
-        return sf.position(e, x, l)
+        return _position(e, x, l)
 
     def slope(self, nodes, s):
         """Slope ∂r/∂x at arc length s, shape (2,)."""
         e, x, l, _ = self.element_at(nodes, s)
-        return sf.slope(e, x, l)
+        return _slope(e, x, l)
 
     # ------------------------------------------------------------------ stress
     # (jitted: these are the post-processing entry points users call eagerly)

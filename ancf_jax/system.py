@@ -201,20 +201,31 @@ class System(eqx.Module):
         """−∂V/∂q of the total potential (elastic Eq. 9, gravity, springs), shape (n,)."""
         return -jax.grad(self.potential_energy)(q, t, load_factor)
 
+    def _beam_forces(self, q, v, with_elastic: bool):
+        """Elastic forces −∂U/∂q and Rayleigh forces −(αM + βK)v of all beams, in one
+        linearization of the elastic force per beam: ``jax.jvp`` of −∂U/∂e along the
+        nodal velocities returns the force (primal) and −K v (tangent) together."""
+        elastic = jnp.zeros_like(q)
+        damping = jnp.zeros_like(q)
+        for i, b in enumerate(self.beams):
+            nodes, vel = self.beam_nodes(q, i), self.beam_nodes(v, i)
+            f, minus_kv = jax.jvp(b.elastic_force, (nodes,), (vel,))
+            m_v = b.mass().add_diagonal(-jnp.repeat(
+                jnp.where(b.mesh.active_nodes, 0.0, 1.0), 4)).matvec(jnp.reshape(vel, (-1,)))
+            o = self.beam_offset(i)
+            sl = slice(o, o + b.n_coordinates)
+            damping = damping.at[sl].add(-b.alpha * m_v + b.beta * jnp.reshape(minus_kv, (-1,)))
+            if with_elastic:
+                elastic = elastic.at[sl].add(jnp.reshape(f, (-1,)))
+        return elastic, damping
+
     def damping_force(self, q, v):
         """Rayleigh damping −(αM + βK) v per beam (Eq. 11) plus dampers, shape (n,).
 
         β K v is one Jacobian-vector product of the elastic force at the current q
         (K is the current tangent stiffness); no matrix is assembled.
         """
-        out = jnp.zeros_like(q)
-        for i, b in enumerate(self.beams):
-            nodes, vel = self.beam_nodes(q, i), self.beam_nodes(v, i)
-            m_v = b.mass().add_diagonal(-jnp.repeat(
-                jnp.where(b.mesh.active_nodes, 0.0, 1.0), 4)).matvec(jnp.reshape(vel, (-1,)))
-            k_v = jnp.reshape(b.stiffness_product(nodes, vel), (-1,))
-            o = self.beam_offset(i)
-            out = out.at[o:o + b.n_coordinates].add(-(b.alpha * m_v + b.beta * k_v))
+        _, out = self._beam_forces(q, v, with_elastic=False)
         for f in self.forces:
             out = out + f.dissipative_force(self, q, v)
         return out
@@ -227,9 +238,19 @@ class System(eqx.Module):
         return load_factor * out
 
     def generalized_force(self, q, v, t, load_factor=1.0):
-        """Q(q, v, t): all forces on the coordinates (right-hand side of Eq. 14), shape (n,)."""
-        return (self.conservative_force(q, t, load_factor) + self.damping_force(q, v)
-                + self.applied_force(q, v, t, load_factor))
+        """Q(q, v, t): all forces on the coordinates (right-hand side of Eq. 14), shape (n,).
+
+        Elastic and Rayleigh forces come from one JVP of the elastic force per beam
+        (see :meth:`_beam_forces`); gravity is the constant consistent load.
+        """
+        elastic, damping = self._beam_forces(q, v, with_elastic=True)
+        out = elastic + damping + load_factor * self.gravity_load()
+        if self.forces:
+            out = out - jax.grad(self.force_potential)(q, t)
+            for f in self.forces:
+                out = out + f.dissipative_force(self, q, v)
+            out = out + self.applied_force(q, v, t, load_factor)
+        return out
 
     # ------------------------------------------------------------------ constraints
     def constraint(self, q, t=0.0):

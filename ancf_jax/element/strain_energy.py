@@ -43,7 +43,7 @@ import jax.numpy as jnp
 
 from ..errors import ModelError
 from .quadrature import RULES, rule
-from .shape_functions import slope, slope_derivative
+from .shape_functions import interpolate_at, slope, slope_derivative
 
 AXIAL_STRAINS = ("green_lagrange", "engineering")
 CURVATURES = ("exact", "material", "small_strain")
@@ -139,22 +139,32 @@ def strain_energy(e, e_ref, length, axial_stiffness, bending_stiffness,
     xa, wa = rule(*formulation.axial_quadrature)
     xb, wb = rule(*formulation.bending_quadrature)
 
-    def metric(x):
-        r1 = slope(e_ref, x, length)
-        return jnp.sqrt(jnp.dot(r1, r1))
+    def dot(a, b):
+        return jnp.sum(a * b, axis=-1)
 
-    def axial_density(x):
-        eps = axial_strain(e, e_ref, x, length, formulation.axial_strain)
-        return 0.5 * axial_stiffness * eps**2 * metric(x)
+    # axial term at the axial quadrature points (vectorized over points)
+    r1 = interpolate_at(e, xa, length, 1)
+    r1_ref = interpolate_at(e_ref, xa, length, 1)
+    g2 = dot(r1_ref, r1_ref)
+    if formulation.axial_strain == "green_lagrange":
+        eps = 0.5 * (dot(r1, r1) - g2) / g2
+    else:
+        eps = jnp.sqrt(dot(r1, r1) / g2) - 1.0
+    ua = jnp.dot(jnp.asarray(wa), 0.5 * axial_stiffness * eps**2 * jnp.sqrt(g2))
 
-    def bending_density(x):
-        if formulation.curvature == "small_strain":
-            r2 = slope_derivative(e, x, length)
-            return 0.5 * bending_stiffness * jnp.dot(r2, r2)
-        dk = (curvature(e, x, length, formulation.curvature)
-              - curvature(e_ref, x, length, formulation.curvature))
-        return 0.5 * bending_stiffness * dk**2 * metric(x)
+    # bending term at the bending quadrature points
+    r1 = interpolate_at(e, xb, length, 1)
+    r2 = interpolate_at(e, xb, length, 2)
+    if formulation.curvature == "small_strain":
+        ub = jnp.dot(jnp.asarray(wb), 0.5 * bending_stiffness * dot(r2, r2))
+    else:
+        r1_ref = interpolate_at(e_ref, xb, length, 1)
+        r2_ref = interpolate_at(e_ref, xb, length, 2)
+        power = 1.5 if formulation.curvature == "exact" else 1.0
 
-    ua = jnp.dot(jnp.asarray(wa), jax.vmap(axial_density)(jnp.asarray(xa) * length))
-    ub = jnp.dot(jnp.asarray(wb), jax.vmap(bending_density)(jnp.asarray(xb) * length))
+        def kappa(a, b):
+            return (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]) / dot(a, a) ** power
+
+        dk = kappa(r1, r2) - kappa(r1_ref, r2_ref)
+        ub = jnp.dot(jnp.asarray(wb), 0.5 * bending_stiffness * dk**2 * jnp.sqrt(dot(r1_ref, r1_ref)))
     return length * (ua + ub)

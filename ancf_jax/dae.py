@@ -1,0 +1,172 @@
+"""The index-reduced DAE of the system (paper Eqs. 12–14, 21) and its linear algebra.
+
+Equations of motion with Lagrange multipliers::
+
+    M q̈ + Φ_qᵀ λ = Q(q, q̇, t),      Φ(q, t) = 0.
+
+Differentiating the constraints twice gives the acceleration-level (index-1) form
+solved by the explicit integrators (Eq. 13/14/21)::
+
+    [ M    Φ_qᵀ ] [ q̈ ]   [ Q ]
+    [ Φ_q  0    ] [ λ  ] = [ γ − 2 ξ ω Φ̇ − ω² Φ ]
+
+with γ from Eq. 12 (nested JVPs in :meth:`ancf_jax.system.System.constraint_rhs`) and
+optional Baumgarte terms (ω [rad/s], ξ = 1) against drift. The sliding coordinates
+have no mass; the matrix stays regular because Φ_q has the beam tangent in their
+columns (Eq. 21).
+
+All matrices here are in bordered form (:class:`~ancf_jax.linalg.SaddleMatrix`): the
+beam coordinates form the block-tridiagonal chain; rigid-body coordinates, sliding
+coordinates and multipliers form the border. Solves cost O(elements).
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .linalg import BlockTridiagonal, SaddleFactor, SaddleMatrix, factor_chain, factor_saddle, solve_saddle
+from .system import System
+
+
+def border_indices(system: System) -> np.ndarray:
+    return system.border_indices()
+
+
+def split(system: System, vec):
+    """Solver order: (chain entries, border entries) of a vector in q order."""
+    c = system.chain_slice()
+    return vec[c], vec[border_indices(system)]
+
+
+def to_solver_order(system: System, vec_q, vec_lam):
+    """[chain part of vec_q, border part of vec_q, vec_lam] (leading axis)."""
+    chain, border = split(system, vec_q)
+    return jnp.concatenate([chain, border, vec_lam], axis=0)
+
+
+def from_solver_order(system: System, x):
+    """Inverse of :func:`to_solver_order`: returns (vector in q order, λ part)."""
+    n_c = system.chain_size
+    nb = len(border_indices(system))
+    out = jnp.zeros((system.n_coordinates,) + x.shape[1:], x.dtype)
+    out = out.at[system.chain_slice()].set(x[:n_c])
+    out = out.at[border_indices(system)].set(x[n_c:n_c + nb])
+    return out, x[n_c + nb:]
+
+
+def saddle_matrix(system: System, chain: BlockTridiagonal | None, border_block, jac) -> SaddleMatrix:
+    """Bordered matrix [[K, Φ_qᵀ], [Φ_q, 0]] for a chain block K_cc (block tridiagonal)
+    and a border block K_bb (dense, (n_b, n_b)); no chain–border coupling in K."""
+    c = system.chain_slice()
+    bi = border_indices(system)
+    jc, jb = jac[:, c], jac[:, bi]
+    n_c, n_bc, m = system.chain_size, len(bi), jac.shape[0]
+    b = jnp.concatenate([jnp.zeros((n_c, n_bc)), jc.T], axis=1)
+    e = jnp.block([[border_block, jb.T], [jb, jnp.zeros((m, m))]]) if m else border_block
+    return SaddleMatrix(chain if n_c else None, b, b.T, e)
+
+
+def mass_chain_factor(system: System):
+    """Factors of the (constant) beam mass; None without beams."""
+    return factor_chain(system.beam_mass()) if system.chain_size else None
+
+
+def mass_saddle_factor(system: System, jac, chain_factor=None, *, dense=False) -> SaddleFactor:
+    """Factors of [[M, Φ_qᵀ], [Φ_q, 0]] at the current Φ_q."""
+    a = saddle_matrix(system, system.beam_mass() if system.chain_size else None,
+                      jnp.diag(system.border_mass_diagonal()), jac)
+    return factor_saddle(a, dense=dense, chain_factor=chain_factor)
+
+
+def powers(system: System, q, v, t, lam):
+    """Rates of the energy-balance terms, shape (3,):
+    [dissipation −v·Q_damping ≥ 0, external power v·Q_applied, constraint power λ·Φ_t].
+
+    With T + V + U the mechanical energy, d/dt (T + V + U) = −P_d + P_e + P_c, so
+    T + V + U + D − W_e − W_c stays constant (D, W_e, W_c the time integrals).
+    """
+    p_d = -jnp.dot(v, system.damping_force(q, v))
+    p_e = jnp.dot(v, system.applied_force(q, v, t))
+    p_c = jnp.dot(lam, system.constraint_time_derivative(q, t)) if system.n_constraints else jnp.zeros(())
+    return jnp.stack([p_d, p_e, p_c])
+
+
+def accelerations(system: System, q, v, t, *, baumgarte: float = 0.0, chain_factor=None,
+                  dense: bool = False):
+    """Accelerations q̈ and multipliers λ of the index-1 form (module docstring).
+
+    Args:
+        baumgarte: ω [rad/s] of the critically damped Baumgarte stabilization
+            (0: none).
+        chain_factor: precomputed factors of the beam mass (it is constant).
+
+    Returns:
+        (q̈ (n,), λ (m,)).
+    """
+    jac = system.constraint_jacobian(q, t)
+    rhs_q = system.generalized_force(q, v, t)
+    gamma = system.constraint_rhs(q, v, t)
+    if system.n_constraints and baumgarte:
+        w = baumgarte
+        gamma = gamma - 2.0 * w * system.constraint_velocity(q, v, t) - w * w * system.constraint(q, t)
+    f = mass_saddle_factor(system, jac, chain_factor, dense=dense)
+    x = solve_saddle(f, to_solver_order(system, rhs_q, gamma))
+    return from_solver_order(system, x)
+
+
+def project_velocity(system: System, q, v, t, factor: SaddleFactor, jac=None):
+    """Project v onto Φ_q v + Φ_t = 0 in the metric of ``factor``'s upper block
+    (minimum-norm correction; the mass metric for the mass saddle factor)."""
+    if not system.n_constraints:
+        return v
+    jac = system.constraint_jacobian(q, t) if jac is None else jac
+    viol = jac @ v + system.constraint_time_derivative(q, t)
+    x = solve_saddle(factor, to_solver_order(system, jnp.zeros_like(v), -viol))
+    dv, _ = from_solver_order(system, x)
+    return v + dv
+
+
+def project_position(system: System, q, t, *, chain_factor=None, iterations: int = 2, dense=False):
+    """Project q onto Φ(q, t) = 0 by ``iterations`` Newton steps of the mass-weighted
+    minimum-norm correction [[M, Φ_qᵀ], [Φ_q, 0]] [Δq; μ] = [0; −Φ]."""
+    if not system.n_constraints:
+        return q
+    for _ in range(iterations):
+        jac = system.constraint_jacobian(q, t)
+        f = mass_saddle_factor(system, jac, chain_factor, dense=dense)
+        x = solve_saddle(f, to_solver_order(system, jnp.zeros_like(q), -system.constraint(q, t)))
+        dq, _ = from_solver_order(system, x)
+        q = q + dq
+    return q
+
+
+def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac) -> SaddleMatrix:
+    """Newton matrix of implicit integrators,
+    [[M β' + C γ' + K, Φ_qᵀ], [Φ_q, 0]], in bordered form.
+
+    Beam blocks: M_b (β' + α_b γ') + K_b (1 + β_b γ') with K_b the tangent stiffness
+    from the per-element Hessians of the strain energy (Rayleigh damping, Eq. 11).
+    Border block: M_border β' plus the exact Hessian of λ·Φ with respect to the border
+    coordinates (rigid-body rotations and sliding coordinates, cheap: the border is
+    small). Left out (a modified Newton method converges without them): the
+    constraint Hessian in the beam coordinates, force-element Jacobians and the
+    derivative of β K v with respect to q.
+    """
+    chain = None
+    if system.chain_size:
+        parts = []
+        for i, b in enumerate(system.beams):
+            nodes = system.beam_nodes(q, i)
+            m = b.mass()
+            k = b.stiffness(nodes)
+            parts.append(m.scale(beta_p + b.alpha * gamma_p) + k.scale(1.0 + b.beta * gamma_p))
+        chain = BlockTridiagonal.concatenate(parts)
+    bi = border_indices(system)
+    border = jnp.diag(system.border_mass_diagonal() * beta_p)
+    if system.n_constraints and len(bi):
+        def lam_phi(xb):
+            return jnp.dot(lam, system.constraint(q.at[bi].set(xb), t))
+        border = border + jax.hessian(lam_phi)(q[bi])
+    return saddle_matrix(system, chain, border, jac)

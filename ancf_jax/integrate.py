@@ -1,0 +1,223 @@
+"""The jittable time loop of the fixed-step integrators.
+
+:func:`integrate_fixed` advances a system with a one-step method
+(:mod:`ancf_jax.integrators`) over ``n_intervals`` output intervals of ``substeps``
+steps each, checks every step for failure, and returns what it computed. It is a pure
+function of arrays: ``jax.jit``, ``jax.vmap`` (batches of systems with identical
+structure, e.g. padded meshes of different element counts) and ``jax.grad`` pass
+through it.
+
+Failures (codes in :mod:`ancf_jax.integrators.base`): a non-finite state (NAN), a
+Newton solve that did not converge (NEWTON), a constraint violation max|Φ| above
+``drift_tolerance`` (DRIFT), a sliding coordinate outside its beam (LEFT_BEAM). After
+the first failure the state is frozen at the last good step and the failure time is
+recorded; :mod:`ancf_jax.simulation` turns that into an error.
+
+Node crossings of sliding joints. The curvature of the cubic interpolation jumps at
+nodes, so the acceleration and the joint reaction jump when a sliding joint crosses
+one; a fixed step that straddles the crossing loses order. With
+``locate_crossings=True`` a step that changes the element of a sliding coordinate is
+split: the crossing fraction θ is found by regula falsi (Illinois) on
+θ ↦ s(step(θ h)) − s_node, the step is taken to just past the node and then
+completed.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from .integrators.base import DRIFT, LEFT_BEAM, NAN, NEWTON, OK, AbstractIntegrator, Carry
+from .joints import SlidingJoint
+from .system import State, System
+
+
+class RunOptions(eqx.Module):
+    """Static options of a run.
+
+    Attributes:
+        drift_tolerance: largest accepted constraint violation max|Φ| [m] (and rad).
+        locate_crossings: split steps at node crossings of sliding joints.
+        crossing_iterations: regula-falsi iterations to locate a crossing.
+    """
+
+    drift_tolerance: float = eqx.field(static=True, default=1e-6)
+    locate_crossings: bool = eqx.field(static=True, default=False)
+    crossing_iterations: int = eqx.field(static=True, default=6)
+
+
+class Segment(eqx.Module):
+    """Outputs of :func:`integrate_fixed` (leading axis: output intervals).
+
+    Attributes:
+        t, q, v, acc, lam, work: the :class:`Carry` at the end of every interval.
+        iterations: Newton iterations in the interval (sum over steps).
+        max_iterations: largest Newton iteration count of a step in the interval.
+        crossings: node crossings located in the interval.
+    """
+
+    t: jnp.ndarray
+    q: jnp.ndarray
+    v: jnp.ndarray
+    acc: jnp.ndarray
+    lam: jnp.ndarray
+    work: jnp.ndarray
+    iterations: jnp.ndarray
+    max_iterations: jnp.ndarray
+    crossings: jnp.ndarray
+
+
+class LoopState(eqx.Module):
+    """Carry of the time loop: integrator carry plus failure bookkeeping."""
+
+    carry: Carry
+    status: jnp.ndarray
+    fail_time: jnp.ndarray
+
+
+def sliding_beams(system: System) -> dict[int, int]:
+    """Beam index of every sliding coordinate (from the sliding joints)."""
+    out = {}
+    for c in system.constraints:
+        if isinstance(c, SlidingJoint):
+            out.setdefault(c.sliding, c.beam)
+    return out
+
+
+def step_status(system: System, old: Carry, new: Carry, converged, options: RunOptions):
+    """Failure code of a step (OK if none)."""
+    finite = (jnp.all(jnp.isfinite(new.q)) & jnp.all(jnp.isfinite(new.v))
+              & jnp.all(jnp.isfinite(new.lam)))
+    code = jnp.where(finite, OK, NAN)
+    code = jnp.where((code == OK) & ~converged, NEWTON, code)
+    if system.n_constraints:
+        viol = jnp.max(jnp.abs(system.constraint(new.q, new.t)))
+        code = jnp.where((code == OK) & ~(viol <= options.drift_tolerance), DRIFT, code)
+    for j, b in sliding_beams(system).items():
+        s = system.sliding(new.q, j)
+        length = system.beams[b].mesh.length
+        out = (s < 0.0) | (s > length)
+        code = jnp.where((code == OK) & out, LEFT_BEAM, code)
+    return code
+
+
+def _crossing(system, integrator, carry, new, h, context, options):
+    """Split a step at the first node crossing of a sliding joint (see module doc).
+
+    Returns (carry, StepInfo, crossed) for the completed step of size h."""
+    slides = sliding_beams(system)
+    if not options.locate_crossings or not slides:
+        return new, None, jnp.array(False)
+    js = list(slides)
+    s0 = jnp.stack([system.sliding(carry.q, j) for j in js])
+    s1 = jnp.stack([system.sliding(new.q, j) for j in js])
+    k0 = jnp.stack([system.beams[slides[j]].mesh.locate(s0[i])[0] for i, j in enumerate(js)])
+    k1 = jnp.stack([system.beams[slides[j]].mesh.locate(s1[i])[0] for i, j in enumerate(js)])
+    crossed = k0 != k1
+    nodes = jnp.stack([system.beams[slides[j]].mesh.node_arc_lengths[
+        jnp.where(k1[i] > k0[i], k0[i] + 1, k0[i])] for i, j in enumerate(js)])
+    direction = jnp.sign(s1 - s0)
+    lengths = jnp.stack([system.beams[slides[j]].mesh.element_lengths[k0[i]] for i, j in enumerate(js)])
+    target = nodes + direction * 1e-9 * lengths
+    theta_lin = jnp.clip((target - s0) / jnp.where(s1 != s0, s1 - s0, 1.0), 0.0, 1.0)
+    first = jnp.argmin(jnp.where(crossed, theta_lin, 2.0))
+    jsel = jnp.asarray(js)[first]
+
+    def s_of(c):
+        return jnp.stack([system.sliding(c.q, j) for j in js])[first]
+
+    def branch():
+        tgt = target[first]
+
+        def f(theta):
+            c, _ = integrator.step(system, carry, theta * h, context)
+            return s_of(c) - tgt
+
+        # Illinois regula falsi on θ ∈ (0, 1): f(0) and f(1) bracket the root
+        fa, fb = s0[first] - tgt, s1[first] - tgt
+
+        def body(_, st):
+            a, b, fa, fb, side = st
+            theta = jnp.clip((a * fb - b * fa) / jnp.where(fb != fa, fb - fa, 1.0), 1e-6, 1 - 1e-6)
+            ft = f(theta)
+            same_b = jnp.sign(ft) == jnp.sign(fb)
+            a2, fa2 = jnp.where(same_b, a, theta), jnp.where(same_b, fa, ft)
+            b2, fb2 = jnp.where(same_b, theta, b), jnp.where(same_b, ft, fb)
+            fa2 = jnp.where(same_b & (side == 1), 0.5 * fa2, fa2)
+            fb2 = jnp.where(~same_b & (side == -1), 0.5 * fb2, fb2)
+            return a2, b2, fa2, fb2, jnp.where(same_b, 1, -1)
+
+        a, b, fa_, fb_, _ = jax.lax.fori_loop(
+            0, options.crossing_iterations, body,
+            (jnp.array(0.0), jnp.array(1.0), fa, fb, jnp.array(0)))
+        theta = jnp.where(jnp.abs(fa_) < jnp.abs(fb_), a, b)
+        theta = jnp.clip(theta, 1e-6, 1.0 - 1e-6)
+
+        def sub(c, dt):
+            c2, info = integrator.step(system, c, dt, context)
+            return c2, info
+
+        cs, infos = jax.lax.scan(sub, carry, jnp.stack([theta * h, (1.0 - theta) * h]))
+        return cs, infos.iterations.sum(), infos.converged.all()
+
+    def keep():
+        return new, jnp.zeros((), jnp.int32), jnp.array(True)
+
+    del jsel
+    out, iters, conv = jax.lax.cond(jnp.any(crossed), branch, keep)
+    return out, (iters, conv), jnp.any(crossed)
+
+
+def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopState, context,
+                    h, *, n_intervals: int, substeps: int, options: RunOptions = RunOptions()):
+    """Advance ``loop`` by ``n_intervals`` × ``substeps`` steps of size h.
+
+    Returns (final LoopState, Segment with one entry per interval). Jittable and
+    vmappable; n_intervals and substeps are static.
+    """
+
+    def one_step(c, _):
+        loop, iters, maxit, ncross = c
+
+        def advance():
+            new, info = integrator.step(system, loop.carry, h, context)
+            new2, extra, crossed = _crossing(system, integrator, loop.carry, new, h, context, options)
+            it = info.iterations
+            conv = info.converged
+            if extra is not None:
+                it = it + extra[0]
+                conv = jnp.where(crossed, extra[1], conv)
+            code = step_status(system, loop.carry, new2, conv, options)
+            ok = code == OK
+            carry = jax.tree.map(lambda a, b: jnp.where(ok, a, b), new2, loop.carry)
+            nl = LoopState(carry, code, jnp.where(ok, loop.fail_time, new2.t))
+            return nl, iters + it, jnp.maximum(maxit, it), ncross + crossed.astype(jnp.int32)
+
+        def frozen():
+            return loop, iters, maxit, ncross
+
+        return jax.lax.cond(loop.status == OK, advance, frozen), None
+
+    def interval(loop, _):
+        zero = jnp.zeros((), jnp.int32)
+        (loop, iters, maxit, ncross), _ = jax.lax.scan(one_step, (loop, zero, zero, zero), None,
+                                                       length=substeps)
+        c = loop.carry
+        return loop, Segment(c.t, c.q, c.v, c.acc, c.lam, c.work, iters, maxit, ncross)
+
+    return jax.lax.scan(interval, loop, None, length=n_intervals)
+
+
+def initial_loop(system: System, integrator: AbstractIntegrator, state: State, context) -> LoopState:
+    """Initial :class:`LoopState` (consistent accelerations and multipliers)."""
+    carry = integrator.init(system, state, context)
+    return LoopState(carry, jnp.asarray(OK), jnp.asarray(jnp.nan))
+
+
+def segment_of(loop: LoopState) -> Segment:  # noqa: D401
+    """The current state as a one-row :class:`Segment` (for the initial output)."""
+    c = loop.carry
+    zero = jnp.zeros((1,), jnp.int32)
+    return Segment(c.t[None], c.q[None], c.v[None], c.acc[None], c.lam[None], c.work[None],
+                   zero, zero, zero)

@@ -1,0 +1,63 @@
+"""Common state and interface of the one-step integrators."""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax.numpy as jnp
+
+# failure codes of a run (see ancf_jax.simulation)
+OK, NAN, NEWTON, DRIFT, LEFT_BEAM = 0, 1, 2, 3, 4
+REASONS = {OK: "ok", NAN: "nan", NEWTON: "newton", DRIFT: "constraint_drift", LEFT_BEAM: "left_beam"}
+
+
+class Carry(eqx.Module):
+    """What a one-step integrator carries from step to step.
+
+    Attributes:
+        t: time [s].
+        q, v: coordinates and velocities, shape (n,).
+        acc: accelerations q̈, shape (n,).
+        aux: integrator-specific vector (the generalized-α pseudo-acceleration), shape (n,).
+        lam: Lagrange multipliers λ, shape (m,).
+        work: time integrals [dissipated D, external work W_e, constraint work W_c] [J].
+        power: their rates at t (:func:`ancf_jax.dae.powers`) [W].
+    """
+
+    t: jnp.ndarray
+    q: jnp.ndarray
+    v: jnp.ndarray
+    acc: jnp.ndarray
+    aux: jnp.ndarray
+    lam: jnp.ndarray
+    work: jnp.ndarray
+    power: jnp.ndarray
+
+
+class StepInfo(eqx.Module):
+    """Per-step diagnostics: Newton iterations (0 for explicit methods) and convergence."""
+
+    iterations: jnp.ndarray
+    converged: jnp.ndarray
+
+
+class AbstractIntegrator(eqx.Module):
+    """A fixed-step one-step method for the constrained equations of motion.
+
+    ``init(system, state, context)`` returns the initial :class:`Carry`;
+    ``step(system, carry, h, context)`` advances it by h and returns
+    ``(carry, StepInfo)``. ``context`` holds quantities computed once per run
+    (:meth:`prepare`), e.g. the factors of the constant beam mass.
+    """
+
+    def prepare(self, system):
+        return None
+
+    def init(self, system, state, context) -> Carry:
+        raise NotImplementedError
+
+    def step(self, system, carry: Carry, h, context):
+        raise NotImplementedError
+
+    @property
+    def order(self) -> int:
+        raise NotImplementedError

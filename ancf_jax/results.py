@@ -1,0 +1,227 @@
+"""Results of a simulation: state histories, diagnostics and post-processing.
+
+A :class:`Results` holds NumPy arrays (one row per output time) and the system that
+produced them. Derived quantities (energies, constraint violations, positions of
+points, stresses, reactions) are computed on demand by jitted, vmapped functions of
+the stored states.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+from typing import Any
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .errors import ModelError
+from .joints import SlidingJoint
+from .system import System
+
+
+@eqx.filter_jit
+def _energies(system: System, q, v, t):
+    def one(qq, vv, tt):
+        return jnp.stack([system.kinetic_energy(vv), system.gravity_potential(qq),
+                          system.strain_energy(qq), system.force_potential(qq, tt)])
+    return jax.vmap(one)(q, v, t)
+
+
+@eqx.filter_jit
+def _violations(system: System, q, v, t):
+    def one(qq, vv, tt):
+        if not system.n_constraints:
+            return jnp.zeros(2)
+        return jnp.stack([jnp.max(jnp.abs(system.constraint(qq, tt))),
+                          jnp.max(jnp.abs(system.constraint_velocity(qq, vv, tt)))])
+    return jax.vmap(one)(q, v, t)
+
+
+@eqx.filter_jit
+def _beam_map(system: System, beam: int, q, fn):
+    return jax.vmap(lambda qq: fn(system.beams[beam], system.beam_nodes(qq, beam)))(q)
+
+
+@dataclasses.dataclass
+class Results:
+    """Histories of a run (N output times).
+
+    Attributes:
+        system: the simulated system.
+        t: output times [s], shape (N,).
+        q, v, acc: coordinates, velocities, accelerations, shape (N, n).
+        lam: Lagrange multipliers λ, shape (N, m) (constraint force −Φ_qᵀ λ).
+        work: [dissipated, external work, constraint work] integrals [J], shape (N, 3).
+        iterations: Newton iterations in each output interval, shape (N,).
+        solver: solver name; dt: step [s] (initial step for adaptive solvers).
+        wall_time_s: run time without compilation; compile_time_s: compilation.
+        status: ``"ok"`` or the failure reason; failure_time: when it failed [s].
+        message: the failure message (empty when ok).
+        info: further solver statistics.
+    """
+
+    system: System
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    acc: np.ndarray
+    lam: np.ndarray
+    work: np.ndarray
+    iterations: np.ndarray
+    solver: str = ""
+    dt: float = float("nan")
+    wall_time_s: float = 0.0
+    compile_time_s: float = 0.0
+    status: str = "ok"
+    failure_time: float | None = None
+    message: str = ""
+    info: dict = dataclasses.field(default_factory=dict)
+
+    # ------------------------------------------------------------------ lookup
+    def _index(self, names: tuple, name: str, what: str) -> int:
+        if name not in names:
+            raise ModelError(f"no {what} named {name!r} (known: {', '.join(map(repr, names)) or 'none'})")
+        return names.index(name)
+
+    def body(self, name: str) -> np.ndarray:
+        """Pose history (x, y, θ) of a rigid body, shape (N, 3)."""
+        k = self._index(self.system.body_names, name, "body")
+        o = self.system.body_offset(k)
+        return self.q[:, o:o + 3]
+
+    def nodes(self, beam: str) -> np.ndarray:
+        """Nodal coordinates of a beam, shape (N, n_nodes, 4) (padding included)."""
+        b = self._index(self.system.beam_names, beam, "beam")
+        o = self.system.beam_offset(b)
+        return self.q[:, o:o + self.system.beams[b].n_coordinates].reshape(len(self.t), -1, 4)
+
+    def node(self, beam: str, index: int) -> np.ndarray:
+        """History of one node (x, y, x', y'), shape (N, 4); index −1 is the last node."""
+        b = self._index(self.system.beam_names, beam, "beam")
+        n = int(self.system.beams[b].mesh.n_elements)
+        i = index if index >= 0 else n + 1 + index
+        if not 0 <= i <= n:
+            raise ModelError(f"node {index} of beam {beam!r} is out of range (0..{n})")
+        return self.nodes(beam)[:, i]
+
+    def point(self, beam: str, s: float) -> np.ndarray:
+        """Position history of the material point at arc length s [m], shape (N, 2)."""
+        b = self._index(self.system.beam_names, beam, "beam")
+        return np.asarray(_beam_map(self.system, b, jnp.asarray(self.q),
+                                    lambda bm, nodes: bm.position(nodes, s)))
+
+    def sliding(self, name: str) -> np.ndarray:
+        """History of a sliding coordinate [m], shape (N,)."""
+        j = self._index(self.system.sliding_names, name, "sliding joint")
+        return self.q[:, self.system.sliding_offset + j]
+
+    def multipliers(self, joint: str) -> np.ndarray:
+        """Lagrange multipliers of one joint, shape (N, size)."""
+        start = 0
+        for c in self.system.constraints:
+            if c.name == joint:
+                return self.lam[:, start:start + c.size]
+            start += c.size
+        names = [c.name for c in self.system.constraints]
+        raise ModelError(f"no joint named {joint!r} (known: {', '.join(map(repr, names))})")
+
+    def sliding_reaction(self, name: str) -> np.ndarray:
+        """Reaction of a sliding joint on its body: (normal, tangential) components
+        along the beam normal (left of the tangent) and tangent [N], shape (N, 2).
+
+        Frictionless: the tangential component is zero up to round-off.
+        """
+        joint = next((c for c in self.system.constraints
+                      if isinstance(c, SlidingJoint) and c.name == name), None)
+        if joint is None:
+            raise ModelError(f"no sliding joint named {name!r}")
+        force = self.multipliers(name)  # force on the body is +λ
+        b, j = joint.beam, joint.sliding
+        s = self.q[:, self.system.sliding_offset + j]
+        tangent = np.asarray(jax.vmap(lambda qq, ss: self.system.beams[b].slope(
+            self.system.beam_nodes(qq, b), ss))(jnp.asarray(self.q), jnp.asarray(s)))
+        tangent = tangent / np.linalg.norm(tangent, axis=1, keepdims=True)
+        normal = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
+        return np.stack([np.sum(force * normal, axis=1), np.sum(force * tangent, axis=1)], axis=1)
+
+    # ------------------------------------------------------------------ stress
+    def stress(self, beam: str, s: float, y: float | None = None, measure: str = "exact") -> np.ndarray:
+        """Bending stress history [Pa] at arc length s on fibre y (Eq. 18), shape (N,)."""
+        b = self._index(self.system.beam_names, beam, "beam")
+        return np.asarray(_beam_map(self.system, b, jnp.asarray(self.q),
+                                    lambda bm, nodes: bm.stress(nodes, s, y, measure)))
+
+    def element_stress(self, beam: str, element: int, xi: float, y: float | None = None,
+                       measure: str = "exact") -> np.ndarray:
+        """Stress history [Pa] in element ``element`` (0-based) at ξ = x/l, shape (N,)."""
+        b = self._index(self.system.beam_names, beam, "beam")
+        return np.asarray(_beam_map(self.system, b, jnp.asarray(self.q),
+                                    lambda bm, nodes: bm.element_stress(nodes, element, xi, y, measure)))
+
+    def stress_along(self, beam: str, points_per_element: int = 11, y: float | None = None,
+                     measure: str = "exact") -> tuple[np.ndarray, np.ndarray]:
+        """Stress along a beam over time: (s (E, P), sigma (N, E, P)) [m, Pa]; NaN on padding."""
+        b = self._index(self.system.beam_names, beam, "beam")
+        sig = np.asarray(_beam_map(self.system, b, jnp.asarray(self.q),
+                                   lambda bm, nodes: bm.stress_along(nodes, points_per_element, y, measure)[1]))
+        s, _ = self.system.beams[b].stress_along(self.system.beams[b].mesh.reference_nodes,
+                                                 points_per_element, y, measure)
+        return np.asarray(s), sig
+
+    # ------------------------------------------------------------------ diagnostics
+    def energy(self) -> dict[str, np.ndarray]:
+        """Energy histories [J]: kinetic, gravity, strain, springs, dissipated, external
+        and constraint work, total = T + V + U + D − W_e − W_c and its drift
+        ``balance_error`` = total − total(0)."""
+        e = np.asarray(_energies(self.system, jnp.asarray(self.q), jnp.asarray(self.v),
+                                 jnp.asarray(self.t)))
+        out = dict(kinetic=e[:, 0], gravity=e[:, 1], strain=e[:, 2], springs=e[:, 3],
+                   dissipated=self.work[:, 0], external=self.work[:, 1], constraint=self.work[:, 2])
+        total = e.sum(axis=1) + self.work[:, 0] - self.work[:, 1] - self.work[:, 2]
+        out["total"] = total
+        out["balance_error"] = total - total[0]
+        return out
+
+    def energy_balance_error(self) -> float:
+        """max |balance error| relative to the largest energy term of the run."""
+        e = self.energy()
+        scale = max(np.max(np.abs(e[k])) for k in ("kinetic", "gravity", "strain", "springs",
+                                                   "dissipated", "external", "constraint"))
+        scale = max(scale, 1e-300)
+        return float(np.max(np.abs(e["balance_error"])) / scale)
+
+    def constraint_violation(self) -> tuple[np.ndarray, np.ndarray]:
+        """(max|Φ|, max|Φ̇|) at every output time."""
+        viol = np.asarray(_violations(self.system, jnp.asarray(self.q), jnp.asarray(self.v),
+                                      jnp.asarray(self.t)))
+        return viol[:, 0], viol[:, 1]
+
+    def summary(self) -> dict[str, Any]:
+        """Diagnostics of the run as a JSON-ready dict."""
+        pos, vel = self.constraint_violation()
+        return dict(solver=self.solver, dt=self.dt, t_end=float(self.t[-1]), outputs=len(self.t),
+                    status=self.status, failure_time=self.failure_time,
+                    wall_time_s=self.wall_time_s, compile_time_s=self.compile_time_s,
+                    newton_iterations=int(self.iterations.sum()),
+                    max_constraint_violation=float(pos.max()),
+                    max_velocity_constraint_violation=float(vel.max()),
+                    energy_balance_error=self.energy_balance_error(), **self.info)
+
+    # ------------------------------------------------------------------ files
+    def save_npz(self, path: str | Path, **extra) -> None:
+        """Full state histories (and any extra arrays) to a NumPy .npz file."""
+        np.savez_compressed(path, t=self.t, q=self.q, v=self.v, acc=self.acc, lam=self.lam,
+                            work=self.work, iterations=self.iterations,
+                            constraint_labels=np.array(self.system.constraint_labels()),
+                            body_names=np.array(self.system.body_names),
+                            beam_names=np.array(self.system.beam_names),
+                            sliding_names=np.array(self.system.sliding_names), **extra)
+
+    def save_summary(self, path: str | Path, **extra) -> dict:
+        data = {**self.summary(), **extra}
+        Path(path).write_text(json.dumps(data, indent=2, default=float))
+        return data
