@@ -34,36 +34,38 @@ def border_indices(system: System) -> np.ndarray:
     return system.border_indices()
 
 
-def split(system: System, vec):
-    """Solver order: (chain entries, border entries) of a vector in q order."""
+def solver_permutation(system: System) -> np.ndarray:
+    """Indices of q in solver order: chain (beam) coordinates, then the border."""
     c = system.chain_slice()
-    return vec[c], vec[border_indices(system)]
+    return np.concatenate([np.arange(c.start, c.stop), border_indices(system)]).astype(int)
 
 
 def to_solver_order(system: System, vec_q, vec_lam):
     """[chain part of vec_q, border part of vec_q, vec_lam] (leading axis)."""
-    chain, border = split(system, vec_q)
-    return jnp.concatenate([chain, border, vec_lam], axis=0)
+    return jnp.concatenate([vec_q[solver_permutation(system)], vec_lam], axis=0)
 
 
 def from_solver_order(system: System, x):
-    """Inverse of :func:`to_solver_order`: returns (vector in q order, λ part)."""
-    n_c = system.chain_size
-    nb = len(border_indices(system))
-    out = jnp.zeros((system.n_coordinates,) + x.shape[1:], x.dtype)
-    out = out.at[system.chain_slice()].set(x[:n_c])
-    out = out.at[border_indices(system)].set(x[n_c:n_c + nb])
-    return out, x[n_c + nb:]
+    """Inverse of :func:`to_solver_order`: returns (vector in q order, λ part).
+
+    A gather with the inverse permutation (its transpose is a scatter-add, so reverse
+    mode differentiates through it)."""
+    n = system.n_coordinates
+    inverse = np.argsort(solver_permutation(system))
+    return x[:n][inverse], x[n:]
 
 
-def saddle_matrix(system: System, chain: BlockTridiagonal | None, border_block, jac) -> SaddleMatrix:
-    """Bordered matrix [[K, Φ_qᵀ], [Φ_q, 0]] for a chain block K_cc (block tridiagonal)
-    and a border block K_bb (dense, (n_b, n_b)); no chain–border coupling in K."""
+def saddle_matrix(system: System, chain: BlockTridiagonal | None, border_block, jac,
+                  coupling=None) -> SaddleMatrix:
+    """Bordered matrix [[K, Φ_qᵀ], [Φ_q, 0]] for a chain block K_cc (block tridiagonal),
+    a border block K_bb (dense, (n_b, n_b)) and an optional symmetric chain–border
+    coupling K_cb (dense, (n_c, n_b))."""
     c = system.chain_slice()
     bi = border_indices(system)
     jc, jb = jac[:, c], jac[:, bi]
     n_c, n_bc, m = system.chain_size, len(bi), jac.shape[0]
-    b = jnp.concatenate([jnp.zeros((n_c, n_bc)), jc.T], axis=1)
+    k_cb = jnp.zeros((n_c, n_bc)) if coupling is None else coupling
+    b = jnp.concatenate([k_cb, jc.T], axis=1)
     e = jnp.block([[border_block, jb.T], [jb, jnp.zeros((m, m))]]) if m else border_block
     return SaddleMatrix(chain if n_c else None, b, b.T, e)
 
@@ -144,15 +146,17 @@ def project_position(system: System, q, t, *, chain_factor=None, iterations: int
 
 def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac) -> SaddleMatrix:
     """Newton matrix of implicit integrators,
-    [[M β' + C γ' + K, Φ_qᵀ], [Φ_q, 0]], in bordered form.
+    [[M β' + C γ' + K + (λ·Φ)_qq, Φ_qᵀ], [Φ_q, 0]], in bordered form.
 
     Beam blocks: M_b (β' + α_b γ') + K_b (1 + β_b γ') with K_b the tangent stiffness
     from the per-element Hessians of the strain energy (Rayleigh damping, Eq. 11).
-    Border block: M_border β' plus the exact Hessian of λ·Φ with respect to the border
-    coordinates (rigid-body rotations and sliding coordinates, cheap: the border is
-    small). Left out (a modified Newton method converges without them): the
-    constraint Hessian in the beam coordinates, force-element Jacobians and the
-    derivative of β K v with respect to q.
+    Border block: M_border β'. Constraint Hessian (λ·Φ)_qq: the joints are linear in
+    the beam coordinates (Eqs. 19–20 are linear in e), so only its border rows and
+    columns are non-zero; they are computed exactly by one ``jacfwd`` over the few
+    border coordinates (rigid-body and sliding coordinates). The coupling of a
+    massless sliding coordinate to the cable through λ·S'(s) is essential for Newton
+    convergence. Left out (a modified Newton method converges without them): force-
+    element Jacobians and the derivative of β K v with respect to q.
     """
     chain = None
     if system.chain_size:
@@ -165,8 +169,12 @@ def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac) -> Sadd
         chain = BlockTridiagonal.concatenate(parts)
     bi = border_indices(system)
     border = jnp.diag(system.border_mass_diagonal() * beta_p)
+    coupling = None
     if system.n_constraints and len(bi):
-        def lam_phi(xb):
-            return jnp.dot(lam, system.constraint(q.at[bi].set(xb), t))
-        border = border + jax.hessian(lam_phi)(q[bi])
-    return saddle_matrix(system, chain, border, jac)
+        def grad_lam_phi(xb):
+            qq = q.at[bi].set(xb)
+            return jax.grad(lambda z: jnp.dot(lam, system.constraint(z, t)))(qq)
+        h = jax.jacfwd(grad_lam_phi)(q[bi])  # (n, n_b): ∂²(λ·Φ)/∂q ∂q_border
+        border = border + h[bi]
+        coupling = h[system.chain_slice()]
+    return saddle_matrix(system, chain, border, jac, coupling)

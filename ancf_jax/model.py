@@ -573,3 +573,23 @@ def assemble_state(system: System, state: State, *, tolerance: float = 1e-10,
     rhs = -(jac @ v + np.asarray(phit_fn(system, jnp.asarray(q), t)))
     v[free] += np.linalg.lstsq(jac[:, free], rhs, rcond=None)[0]
     return State(jnp.asarray(q), jnp.asarray(v), state.t)
+
+
+def build_in_equilibrium(model: Model, *, load_steps: int = 10, pad_to=None,
+                         tolerance: float = 1e-9):
+    """Static equilibrium with every sliding joint held, then released.
+
+    Builds the system with the holds (``hold=True``), solves the statics from the
+    model's initial guess, and returns the system without holds together with the
+    equilibrium at rest as its initial state (paper §4.3: the trolley is released at
+    t = 0).
+
+    Returns:
+        (released system, initial State, StaticSolution of the held system).
+    """
+    from .statics import solve_static
+    held, guess = model.build(pad_to=pad_to, hold=True)
+    sol = solve_static(held, guess, load_steps=load_steps, tolerance=tolerance)
+    released, _ = model.build(pad_to=pad_to, hold=False, assemble=False)
+    state = State(sol.state.q, jnp.zeros_like(sol.state.q), jnp.zeros(()))
+    return released, state, sol

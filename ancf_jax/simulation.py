@@ -238,9 +238,10 @@ def _simulate_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunk
     # rows: the initial state plus n_int intervals; after a failure, rows up to the last good step
     n_rows = 1 + n_int
     if status != OK:
+        # after a failure the state is frozen: rows stop advancing in time
         t_all = np.concatenate([np.asarray(s.t) for s in segs])
-        n_rows = min(n_rows, int(np.sum(t_all < t_fail - 0.5 * h)))
-        n_rows = max(n_rows, 1)
+        stalled = np.nonzero(np.diff(t_all) <= 0.0)[0]
+        n_rows = min(n_rows, int(stalled[0]) + 1 if stalled.size else len(t_all))
     message = "" if status == OK else _failure_message(status, t_fail, system, options)
     res = _assemble(system, segs, name, h, status, t_fail, n_rows, wall, compile_s, message,
                     dict(steps=int(min(done_intervals, n_int) * sub), substeps_per_output=sub))

@@ -74,7 +74,7 @@ def _load_scale(system: System, q, t):
 
 
 @eqx.filter_jit
-def _solve(system: System, q0, lam0, t, load_factors, tolerance, max_iterations):
+def _solve(system: System, q0, lam0, t, load_factors, tolerance, max_iterations, regularization):
     n = q0.shape[0]
     fscale = _load_scale(system, q0, t)
     lscale = jnp.maximum(jnp.max(jnp.abs(q0)), 1.0)
@@ -96,6 +96,7 @@ def _solve(system: System, q0, lam0, t, load_factors, tolerance, max_iterations)
         def body(c):
             x_acc, x_try, dx, a, it, _, _ = c
             jac, r = jax.jacfwd(residual, has_aux=True)(x_try, lf)
+            jac = jac + reg
             rn = jnp.max(jnp.abs(r))
             finite = jnp.isfinite(rn)
             step = jnp.where(it > 0, jnp.max(jnp.abs(a * dx[:n])), jnp.inf)
@@ -121,23 +122,34 @@ def _solve(system: System, q0, lam0, t, load_factors, tolerance, max_iterations)
         x_out = jnp.where(ok, x_new, x)
         return (x_out, failed | ~ok), (it, res, ok)
 
+    # mass-proportional regularization of the Newton matrix: coordinates with neither
+    # stiffness nor load (e.g. the rotation of a body whose joints all act at its
+    # centre) would make it singular; the residual, hence the solution, is unchanged
+    m = jnp.diag(system.mass_matrix()) * ~system.inactive_mask()
+    jqq = jnp.abs(jnp.diag(jax.jacfwd(residual, has_aux=True)(jnp.concatenate([q0, lam0]), 1.0)[0]))[:n]
+    eps = regularization * jnp.max(jqq) / jnp.maximum(jnp.max(m), 1e-300)
+    reg = jnp.diag(jnp.concatenate([eps * m, jnp.zeros(lam0.shape[0])]))
     x0 = jnp.concatenate([q0, lam0])
     (x, _), (its, res, ok) = jax.lax.scan(load_step, (x0, jnp.array(False)), load_factors)
     return x[:n], x[n:] * fscale, its, res, ok
 
 
 def solve_static_pure(system: System, state: State, *, load_steps: int = 1,
-                      tolerance: float = 1e-9, max_iterations: int = 50) -> StaticSolution:
+                      tolerance: float = 1e-9, max_iterations: int = 50,
+                      regularization: float = 1e-12) -> StaticSolution:
     """Jittable/vmappable static solve; never raises (check ``converged``)."""
     load_factors = jnp.arange(1, load_steps + 1, dtype=float) / load_steps
     lam0 = jnp.zeros(system.n_constraints)
     q, lam, its, res, ok = _solve(system, state.q, lam0, jnp.asarray(state.t, float), load_factors,
-                                  tolerance, max_iterations)
+                                  tolerance, max_iterations, regularization)
+    # full Newton steps may turn a body by whole revolutions: report angles in (−π, π]
+    theta = 3 * jnp.arange(system.n_bodies) + 2
+    q = q.at[theta].set(jnp.pi - jnp.mod(jnp.pi - q[theta], 2 * jnp.pi))
     return StaticSolution(State(q, jnp.zeros_like(q), state.t), lam, its, res, ok, load_factors)
 
 
 def solve_static(system: System, state: State, *, load_steps: int = 1, tolerance: float = 1e-9,
-                 max_iterations: int = 50) -> StaticSolution:
+                 max_iterations: int = 50, regularization: float = 1e-12) -> StaticSolution:
     """Static equilibrium from the initial guess ``state`` (see module docstring).
 
     Args:
@@ -145,6 +157,9 @@ def solve_static(system: System, state: State, *, load_steps: int = 1, tolerance
         tolerance: on the residual, scaled by the largest external load entry (also
             converged when the Newton correction falls below 1e-10 of the model size).
         max_iterations: Newton iterations per load step.
+        regularization: relative weight of a mass-proportional term added to the Newton
+            matrix (not the residual) so that unloaded, unconstrained coordinates do not
+            make it singular.
 
     Raises:
         StaticsError: a load step did not converge; names the step, its load factor and
@@ -154,7 +169,7 @@ def solve_static(system: System, state: State, *, load_steps: int = 1, tolerance
     tolerance = check_positive("tolerance", tolerance)
     max_iterations = check_count("max_iterations", max_iterations, 1)
     sol = solve_static_pure(system, state, load_steps=load_steps, tolerance=tolerance,
-                            max_iterations=max_iterations)
+                            max_iterations=max_iterations, regularization=regularization)
     ok = np.asarray(sol.converged)
     if not ok.all():
         k = int(np.argmin(ok))

@@ -16,11 +16,14 @@ The nonlinear equations in (q̈_{n+1}, λ_{n+1}) are solved by a modified Newton
 the iteration matrix [[M β' + C γ' + K, Φ_qᵀ], [Φ_q, 0]] (β' = (1 − α_m)/(h² β (1 − α_f)),
 γ' = γ/(h β)) is assembled at the predictor from the per-element Hessians of the
 strain energy (:func:`ancf_jax.dae.iteration_matrix`), factored once in bordered
-block-tridiagonal form and reused; it is refreshed when convergence is slow.
+block-tridiagonal form and reused while the iteration contracts fast; it is refactored
+at the current iterate when a correction shrinks by less than ``contraction`` (so a
+strongly nonlinear step falls back to full Newton).
 
 Positions satisfy Φ = 0 to the Newton tolerance at every step (index 3). With
 ``velocity_projection=True`` (default) the velocities are also projected onto
-Φ_q v + Φ_t = 0 after the step, using the same factors.
+Φ_q v + Φ_t = 0 after the step in the mass metric (the beam-mass factors are constant,
+so this costs one small Schur complement).
 
 Differentiable: the Newton solve is wrapped in :func:`jax.lax.custom_root`, so
 ``jax.grad`` and ``jax.jvp`` of a trajectory differentiate the converged equations
@@ -49,6 +52,8 @@ class GeneralizedAlpha(AbstractIntegrator):
         max_iterations: Newton iterations per step before the step counts as failed.
         refresh_every: rebuild and refactor the iteration matrix after this many
             iterations without convergence.
+        contraction: refactor at the current iterate when a correction is larger than
+            this fraction of the previous one (slow or diverging modified Newton).
         velocity_projection: project v onto the velocity constraints after each step.
         refinement: iterative-refinement steps of the tangent solves (derivatives).
         dense: dense LU instead of the bordered block-tridiagonal solver.
@@ -57,7 +62,8 @@ class GeneralizedAlpha(AbstractIntegrator):
     rho_inf: float = eqx.field(static=True, default=0.9)
     newton_tol: float = eqx.field(static=True, default=1e-10)
     max_iterations: int = eqx.field(static=True, default=16)
-    refresh_every: int = eqx.field(static=True, default=4)
+    refresh_every: int = eqx.field(static=True, default=6)
+    contraction: float = eqx.field(static=True, default=0.25)
     velocity_projection: bool = eqx.field(static=True, default=True)
     refinement: int = eqx.field(static=True, default=4)
     dense: bool = eqx.field(static=True, default=False)
@@ -131,21 +137,27 @@ class GeneralizedAlpha(AbstractIntegrator):
 
         def newton(f, x_init):
             def cond(c):
-                _, _, it, done, _ = c
+                _, _, it, done, _, _ = c
                 return (~done) & (it < self.max_iterations)
 
             def body(c):
-                x, fac, it, _, _ = c
-                fac = jax.lax.cond(it % self.refresh_every == 0, lambda: factor_at(x), lambda: fac)
+                x, fac, it, _, err_prev, refresh = c
+                fac = jax.lax.cond(refresh, lambda: factor_at(x), lambda: fac)
                 dx, dq = correction(fac, f(x))
                 x = x + dx
                 err = jnp.max(jnp.abs(dq))
                 done = (err <= self.newton_tol) & jnp.all(jnp.isfinite(x))
-                return x, fac, it + 1, done, err
+                # refactor at the new iterate when the modified Newton iteration
+                # contracts slowly (or diverges), and every refresh_every iterations
+                slow = err > self.contraction * err_prev
+                refresh = slow | ((it + 1) % self.refresh_every == 0)
+                return x, fac, it + 1, done, err, refresh
 
-            x, fac, it, done, _ = jax.lax.while_loop(
-                cond, body, (x_init, fac_none, jnp.array(0), jnp.array(False), jnp.array(jnp.inf)))
-            return x, (it, done, fac)
+            x, fac, it, done, _, _ = jax.lax.while_loop(
+                cond, body, (x_init, fac_none, jnp.array(0), jnp.array(False), jnp.array(jnp.inf),
+                             jnp.array(True)))
+            # auxiliary outputs of custom_root must be floating point
+            return x, (it.astype(float), done.astype(float))
 
         def tangent_solve(g, y):
             # solve J x = y with the iteration matrix at the predictor and iterative
@@ -158,14 +170,19 @@ class GeneralizedAlpha(AbstractIntegrator):
             return jax.lax.fori_loop(0, self.refinement + 1, refine, jnp.zeros_like(y))
 
         if self.implicit_diff:
-            x, (iters, converged, fac) = jax.lax.custom_root(residual, x0, newton,
-                                                             tangent_solve, has_aux=True)
+            x, (iters, converged) = jax.lax.custom_root(residual, x0, newton, tangent_solve,
+                                                        has_aux=True)
         else:
-            x, (iters, converged, fac) = newton(residual, x0)
+            x, (iters, converged) = newton(residual, x0)
+        iters = jax.lax.stop_gradient(iters).astype(jnp.int32)
+        converged = jax.lax.stop_gradient(converged) > 0.5
         qdd, lam = x[:n], x[n:]
         q1, v1, a1 = kinematics(qdd)
         if self.velocity_projection and system.n_constraints:
-            v1 = dae.project_velocity(system, q1, v1, t1, jax.lax.stop_gradient(fac))
+            # mass-metric projection; the beam-mass factors are constant (context)
+            jac = system.constraint_jacobian(q1, t1)
+            mfac = dae.mass_saddle_factor(system, jac, context, dense=self.dense)
+            v1 = dae.project_velocity(system, q1, v1, t1, mfac, jac)
         p1 = dae.powers(system, q1, v1, t1, lam)
         work = carry.work + 0.5 * h * (carry.power + p1)  # trapezoidal rule (order 2)
         return Carry(t1, q1, v1, qdd, a1, lam, work, p1), StepInfo(iters, converged)
