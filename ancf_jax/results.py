@@ -119,6 +119,17 @@ class Results:
         j = self._index(self.system.sliding_names, name, "sliding joint")
         return self.q[:, self.system.sliding_offset + j]
 
+    def sliding_point(self, name: str) -> np.ndarray:
+        """Position of the point of beam at the sliding coordinate ``name``, shape (N, 2)."""
+        joint = next((c for c in self.system.constraints
+                      if isinstance(c, SlidingJoint) and c.name == name), None)
+        if joint is None:
+            raise ModelError(f"no sliding joint named {name!r}")
+        b, j = joint.beam, joint.sliding
+        s = self.q[:, self.system.sliding_offset + j]
+        return np.asarray(jax.vmap(lambda qq, ss: self.system.beams[b].position(
+            self.system.beam_nodes(qq, b), ss))(jnp.asarray(self.q), jnp.asarray(s)))
+
     def multipliers(self, joint: str) -> np.ndarray:
         """Lagrange multipliers of one joint, shape (N, size)."""
         start = 0

@@ -1,0 +1,118 @@
+"""Named outputs of a run: what goes into the CSV columns.
+
+An :class:`Output` names one scalar history computed from a
+:class:`~ancf_jax.results.Results`: a coordinate of a beam node or material point, a
+body pose, a sliding coordinate, a bending stress, a joint reaction or an energy. The
+built-in models (M1, M2) and scenario files describe their CSV columns with these.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import csv
+from pathlib import Path
+from typing import Iterable, Optional
+
+import numpy as np
+
+from .errors import ModelError
+from .results import Results
+
+KINDS = ("node", "point", "body", "sliding", "sliding_point", "stress", "reaction", "energy")
+COMPONENTS = {
+    "node": ("x", "y", "slope_x", "slope_y"),
+    "point": ("x", "y"),
+    "body": ("x", "y", "theta"),
+    "sliding": ("s",),
+    "sliding_point": ("x", "y"),
+    "stress": ("sigma",),
+    "reaction": ("normal", "tangential", "0", "1", "2", "3"),
+    "energy": ("kinetic", "gravity", "strain", "springs", "dissipated", "external", "constraint",
+               "total", "balance_error"),
+}
+
+
+@dataclasses.dataclass(frozen=True)
+class Output:
+    """One named scalar output history (SI units).
+
+    Attributes:
+        name: column name.
+        kind: ``"node"`` (beam node coordinate), ``"point"`` (material point of a beam at
+            arc length ``s``), ``"body"`` (pose), ``"sliding"`` (sliding coordinate s),
+            ``"sliding_point"`` (position of a sliding joint's point on its beam),
+            ``"stress"`` (bending stress, Eq. 18), ``"reaction"`` (joint multiplier
+            component, or normal/tangential reaction of a sliding joint), ``"energy"``.
+        target: beam, body or joint name (unused for energy).
+        component: see :data:`COMPONENTS`.
+        node: node index (``"node"``); negative counts from the last node.
+        s: arc length [m] (``"point"``; ``"stress"`` if ``element`` is None).
+        element, xi: element index (0-based) and ξ = x/l ∈ [0, 1] (``"stress"``).
+        fibre: fibre distance y [m] (``"stress"``; default the outer fibre).
+        measure: curvature measure of a stress (``"exact"``, ``"small_strain"``).
+    """
+
+    name: str
+    kind: str
+    target: str = ""
+    component: str = ""
+    node: Optional[int] = None
+    s: Optional[float] = None
+    element: Optional[int] = None
+    xi: Optional[float] = None
+    fibre: Optional[float] = None
+    measure: str = "exact"
+
+    def __post_init__(self):
+        if self.kind not in KINDS:
+            raise ModelError(f"output {self.name!r}: kind must be one of {KINDS}, got {self.kind!r}")
+        comp = self.component or COMPONENTS[self.kind][0]
+        if comp not in COMPONENTS[self.kind]:
+            raise ModelError(f"output {self.name!r}: component of a {self.kind} output must be one of "
+                             f"{COMPONENTS[self.kind]}, got {self.component!r}")
+        object.__setattr__(self, "component", comp)
+
+
+def evaluate(results: Results, outputs: Iterable[Output]) -> dict[str, np.ndarray]:
+    """Histories of the outputs, each shape (N,), keyed by name (with ``t`` first)."""
+    out = {"t": np.asarray(results.t)}
+    energy = None
+    for o in outputs:
+        if o.kind == "node":
+            col = "x y slope_x slope_y".split().index(o.component)
+            val = results.node(o.target, -1 if o.node is None else o.node)[:, col]
+        elif o.kind == "point":
+            val = results.point(o.target, float(o.s))[:, "xy".index(o.component)]
+        elif o.kind == "body":
+            val = results.body(o.target)[:, "x y theta".split().index(o.component)]
+        elif o.kind == "sliding":
+            val = results.sliding(o.target)
+        elif o.kind == "sliding_point":
+            val = results.sliding_point(o.target)[:, "xy".index(o.component)]
+        elif o.kind == "stress":
+            if o.element is not None:
+                val = results.element_stress(o.target, o.element, 0.5 if o.xi is None else o.xi,
+                                             o.fibre, o.measure)
+            else:
+                val = results.stress(o.target, float(o.s), o.fibre, o.measure)
+        elif o.kind == "reaction":
+            if o.component in ("normal", "tangential"):
+                val = results.sliding_reaction(o.target)[:, 0 if o.component == "normal" else 1]
+            else:
+                val = results.multipliers(o.target)[:, int(o.component)]
+        else:
+            energy = results.energy() if energy is None else energy
+            val = energy[o.component]
+        out[o.name] = np.asarray(val, float)
+    return out
+
+
+def write_csv(path: str | Path, columns: dict[str, np.ndarray], precision: int = 10) -> None:
+    """Write equal-length columns with a header row (SI units)."""
+    names = list(columns)
+    data = np.column_stack([np.asarray(columns[k], float) for k in names])
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(names)
+        for row in data:
+            w.writerow([f"{x:.{precision}g}" for x in row])
