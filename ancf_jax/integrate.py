@@ -159,7 +159,7 @@ def _crossing(system, integrator, carry, new, h, context, options):
             return c2, info
 
         cs, infos = jax.lax.scan(sub, carry, jnp.stack([theta * h, (1.0 - theta) * h]))
-        return cs, infos.iterations.sum(), infos.converged.all()
+        return cs, infos.iterations.sum().astype(jnp.int32), infos.converged.all()
 
     def keep():
         return new, jnp.zeros((), jnp.int32), jnp.array(True)
