@@ -502,10 +502,15 @@ class Model:
 
 
 # ---------------------------------------------------------------------- assembly checks
+# module-level jits: systems of the same structure reuse the compiled code (one jit per
+# call would recompile Φ, Φ_q and Φ_t on every build, Φ_q twice)
+_CONSTRAINT = jax.jit(lambda sys, q, t: sys.constraint(q, t))
+_JACOBIAN = jax.jit(lambda sys, q, t: sys.constraint_jacobian(q, t))
+_TIME_DERIVATIVE = jax.jit(lambda sys, q, t: sys.constraint_time_derivative(q, t))
+
+
 def _jitted(system):
-    return (jax.jit(lambda sys, q, t: sys.constraint(q, t)),
-            jax.jit(lambda sys, q, t: sys.constraint_jacobian(q, t)),
-            jax.jit(lambda sys, q, t: sys.constraint_time_derivative(q, t)))
+    return _CONSTRAINT, _JACOBIAN, _TIME_DERIVATIVE
 
 
 def check_constraint_rank(system: System, q, t=0.0, *, rtol: float = 1e-9) -> None:
