@@ -28,7 +28,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from .integrators.base import DRIFT, LEFT_BEAM, NAN, NEWTON, OK, AbstractIntegrator, Carry
+from .integrators.base import DRIFT, LEFT_BEAM, NAN, NEWTON, OK, AbstractIntegrator, Carry, StepInfo
 from .joints import SlidingJoint
 from .system import State, System
 
@@ -40,11 +40,16 @@ class RunOptions(eqx.Module):
         drift_tolerance: largest accepted constraint violation max|Φ| [m] (and rad).
         locate_crossings: split steps at node crossings of sliding joints.
         crossing_iterations: regula-falsi iterations to locate a crossing.
+        max_halvings: when a step fails (Newton not converged, non-finite state), redo
+            it in substeps, halving down to h / 2^max_halvings and growing back after
+            successes (0: no retries; a ``while_loop``, so reverse-mode differentiation
+            needs 0).
     """
 
     drift_tolerance: float = eqx.field(static=True, default=1e-6)
     locate_crossings: bool = eqx.field(static=True, default=False)
     crossing_iterations: int = eqx.field(static=True, default=6)
+    max_halvings: int = eqx.field(static=True, default=0)
 
 
 class Segment(eqx.Module):
@@ -169,12 +174,41 @@ def _crossing(system, integrator, carry, new, h, context, options):
     return out, (iters, conv), jnp.any(crossed)
 
 
+def _retry_in_substeps(system, integrator, carry, h, context, options):
+    """Redo a failed step of size h as a sequence of smaller steps (see RunOptions).
+
+    Returns (carry, iterations, converged)."""
+    h_min = h / 2.0**options.max_halvings
+
+    def cond(st):
+        c, done, h_try, _, ok = st
+        return ok & (done < h * (1.0 - 1e-12))
+
+    def body(st):
+        c, done, h_try, iters, _ = st
+        dt = jnp.minimum(h_try, h - done)
+        new, info = integrator.step(system, c, dt, context)
+        good = (info.converged & jnp.all(jnp.isfinite(new.q)) & jnp.all(jnp.isfinite(new.v))
+                & jnp.all(jnp.isfinite(new.lam)))
+        c = jax.tree.map(lambda a, b: jnp.where(good, a, b), new, c)
+        done = jnp.where(good, done + dt, done)
+        h_next = jnp.where(good, jnp.minimum(2.0 * h_try, h), 0.5 * h_try)
+        ok = good | (0.5 * h_try >= h_min * (1.0 - 1e-12))
+        return c, done, h_next, iters + info.iterations, ok
+
+    c, done, _, iters, ok = jax.lax.while_loop(
+        cond, body, (carry, jnp.zeros(()), 0.5 * h, jnp.zeros((), jnp.int32), jnp.array(True)))
+    return c, iters, ok & (done >= h * (1.0 - 1e-12))
+
+
 def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopState, context,
-                    h, *, n_intervals: int, substeps: int, options: RunOptions = RunOptions()):
+                    h, *, n_intervals: int, substeps: int, options: RunOptions = RunOptions(),
+                    t_stop=jnp.inf):
     """Advance ``loop`` by ``n_intervals`` × ``substeps`` steps of size h.
 
-    Returns (final LoopState, Segment with one entry per interval). Jittable and
-    vmappable; n_intervals and substeps are static.
+    Steps that would start at or after ``t_stop`` are skipped (so a run split into
+    equal chunks ends exactly at its end time). Returns (final LoopState, Segment with
+    one entry per interval). Jittable and vmappable; n_intervals and substeps are static.
     """
 
     def one_step(c, _):
@@ -182,6 +216,14 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
 
         def advance():
             new, info = integrator.step(system, loop.carry, h, context)
+            if options.max_halvings:
+                fine = (info.converged & jnp.all(jnp.isfinite(new.q)) & jnp.all(jnp.isfinite(new.v)))
+
+                def retry():
+                    c, it, conv = _retry_in_substeps(system, integrator, loop.carry, h, context, options)
+                    return c, StepInfo(info.iterations + it, conv)
+
+                new, info = jax.lax.cond(fine, lambda: (new, info), retry)
             new2, extra, crossed = _crossing(system, integrator, loop.carry, new, h, context, options)
             it = info.iterations
             conv = info.converged
@@ -197,7 +239,8 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
         def frozen():
             return loop, iters, maxit, ncross
 
-        return jax.lax.cond(loop.status == OK, advance, frozen), None
+        active = (loop.status == OK) & (loop.carry.t < t_stop - 0.5 * h)
+        return jax.lax.cond(active, advance, frozen), None
 
     def interval(loop, _):
         zero = jnp.zeros((), jnp.int32)

@@ -15,6 +15,7 @@ from .. import mesh
 from ..element.strain_energy import Formulation
 from ..errors import ModelError
 from ..model import Model, body_point, build_in_equilibrium, node
+from ..outputs import Output
 from ..section import Section
 
 #: parameters of M2 (SI), as in MODELS.md; I as printed in Table 2
@@ -22,6 +23,23 @@ M2 = dict(length=4.02, span=3.8, n_elements=24, diameter=3e-3, area=7.068e-6,
           second_moment=7.952e-12, youngs_modulus=200e9, cable_mass=0.148,
           trolley_mass=2.67, trolley_inertia=0.2242, cabin_mass=2.67, cabin_inertia=0.2242,
           hanger=0.5, s0=0.6, alpha=0.01, beta=0.0, gravity=9.81)
+
+
+#: the CSV columns of ``ancf-jax run m2``: sliding coordinate, point 1 (the sliding point
+#: on the cable), cabin centre RB2
+OUTPUTS = (
+    Output("s", "sliding", "slider"),
+    Output("point1_x", "sliding_point", "slider", "x"),
+    Output("point1_y", "sliding_point", "slider", "y"),
+    Output("rb2_x", "body", "cabin", "x"),
+    Output("rb2_y", "body", "cabin", "y"),
+)
+
+#: default run settings (MODELS.md: t in [0, 3] s). The release sends an axial shock
+#: through the light, stiff cable; generalized-α with ρ∞ = 0.5 damps it at h = 1 ms.
+RUN = dict(t_end=3.0, dt=1e-3, output_dt=1e-2, solver="generalized-alpha",
+           solver_options=dict(rho_inf=0.5, max_iterations=30))
+ELEMENT_COUNTS = (12, 18, 24)
 
 
 def m2_model(n_elements: int | None = None, *, formulation: Formulation | None = None,
