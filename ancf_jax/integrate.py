@@ -19,7 +19,9 @@ one; a fixed step that straddles the crossing loses order. With
 ``locate_crossings=True`` a step that changes the element of a sliding coordinate is
 split: the crossing fraction θ is found by regula falsi (Illinois) on
 θ ↦ s(step(θ h)) − s_node, the step is taken to just past the node and then
-completed.
+completed. (Crossing location and step retries are solver internals written as while
+loops; gradients by reverse mode need both off, which is the default of
+:func:`ancf_jax.simulation.trajectory`.)
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from .integrators.base import DRIFT, LEFT_BEAM, NAN, NEWTON, OK, AbstractIntegrator, Carry, StepInfo
+from .integrators.base import DRIFT, LEFT_BEAM, NAN, NEWTON, OK, AbstractIntegrator, Carry, StepInfo, run_if
 from .joints import SlidingJoint
 from .system import State, System
 
@@ -166,16 +168,15 @@ def _crossing(system, integrator, carry, new, h, context, options):
         cs, infos = jax.lax.scan(sub, carry, jnp.stack([theta * h, (1.0 - theta) * h]))
         return cs, infos.iterations.sum(), infos.converged.all()
 
-    def keep():
-        return new, jnp.zeros((), jnp.int32), jnp.array(True)
-
     del jsel
-    out, iters, conv = jax.lax.cond(jnp.any(crossed), branch, keep)
+    out, iters, conv = run_if(jnp.any(crossed), lambda _: branch(),
+                              (new, jnp.zeros((), jnp.int32), jnp.array(True)))
     return out, (iters, conv), jnp.any(crossed)
 
 
-def _retry_in_substeps(system, integrator, carry, h, context, options):
-    """Redo a failed step of size h as a sequence of smaller steps (see RunOptions).
+def _retry_in_substeps(system, integrator, carry, h, context, options, need):
+    """Redo a failed step of size h as a sequence of smaller steps (see RunOptions),
+    where ``need`` is set (a while loop: under vmap only members that need it work).
 
     Returns (carry, iterations, converged)."""
     h_min = h / 2.0**options.max_halvings
@@ -197,8 +198,8 @@ def _retry_in_substeps(system, integrator, carry, h, context, options):
         return c, done, h_next, iters + info.iterations, ok
 
     c, done, _, iters, ok = jax.lax.while_loop(
-        cond, body, (carry, jnp.zeros(()), 0.5 * h, jnp.zeros((), jnp.int32), jnp.array(True)))
-    return c, iters, ok & (done >= h * (1.0 - 1e-12))
+        cond, body, (carry, jnp.where(need, 0.0, h), 0.5 * h, jnp.zeros((), jnp.int32), need))
+    return c, iters, done >= h * (1.0 - 1e-12)
 
 
 def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopState, context,
@@ -218,12 +219,9 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
             new, info = integrator.step(system, loop.carry, h, context)
             if options.max_halvings:
                 fine = (info.converged & jnp.all(jnp.isfinite(new.q)) & jnp.all(jnp.isfinite(new.v)))
-
-                def retry():
-                    c, it, conv = _retry_in_substeps(system, integrator, loop.carry, h, context, options)
-                    return c, StepInfo(info.iterations + it, conv)
-
-                new, info = jax.lax.cond(fine, lambda: (new, info), retry)
+                c, it, conv = _retry_in_substeps(system, integrator, loop.carry, h, context, options, ~fine)
+                new = jax.tree.map(lambda a, b: jnp.where(fine, a, b), new, c)
+                info = StepInfo(info.iterations + it, fine | conv)
             new2, extra, crossed = _crossing(system, integrator, loop.carry, new, h, context, options)
             it = info.iterations
             conv = info.converged

@@ -72,6 +72,19 @@ def solver_name(solver) -> str:
     return type(solver).__name__
 
 
+STEPS_PER_CHUNK = 500
+
+
+def _chunking(n_intervals: int, substeps: int, chunks: int | None) -> tuple[int, int]:
+    """(intervals per chunk, number of chunks). By default a chunk is about
+    STEPS_PER_CHUNK steps, so runs of different lengths share one compiled chunk."""
+    if chunks is None:
+        per = max(1, min(n_intervals, int(math.ceil(STEPS_PER_CHUNK / substeps))))
+    else:
+        per = int(math.ceil(n_intervals / max(1, min(int(chunks), n_intervals))))
+    return per, int(math.ceil(n_intervals / per))
+
+
 def _halvings(value) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 <= value <= 30:
         raise ModelError(f"max_halvings must be an integer in 0..30, got {value!r}")
@@ -157,8 +170,9 @@ def simulate(system: System, state: State, *, t_end: float, dt: float | None = N
         on_failure: ``"raise"`` (a :class:`SimulationError` carrying the results up to
             the failure) or ``"return"`` (results with ``status`` set).
         progress: show a progress bar (None: only when the run takes over a second).
-        chunks: number of compiled chunks the run is split into (progress and early
-            stop granularity; default up to 50).
+        chunks: number of chunks the run is split into (progress and early-stop
+            granularity; default: chunks of about 500 steps, one compiled program for
+            runs of any length).
         solver_options: options for a solver given by name.
 
     Raises:
@@ -177,9 +191,7 @@ def simulate(system: System, state: State, *, t_end: float, dt: float | None = N
         raise ModelError("solver_options apply to solvers given by name")
     options = RunOptions(drift_tolerance=drift_tolerance, locate_crossings=locate_crossings,
                          max_halvings=_halvings(max_halvings))
-    n_chunks = min(n_int, 50) if chunks is None else max(1, min(int(chunks), n_int))
-    per_chunk = int(math.ceil(n_int / n_chunks))
-    n_chunks = int(math.ceil(n_int / per_chunk))
+    per_chunk, n_chunks = _chunking(n_int, sub, chunks)
     t0 = float(state.t)
     if isinstance(solver, DiffraxSolver):
         return _simulate_diffrax(system, state, solver, t0, n_int, out_dt, dt, per_chunk, n_chunks,
@@ -206,6 +218,32 @@ _chunk_batch = eqx.filter_jit(eqx.filter_vmap(
                            None, None)))
 
 
+_COMPILED: dict = {}
+
+
+def _signature(args):
+    """Hashable description of arguments: tree structure (with static fields), shapes
+    and dtypes of arrays, values of everything else."""
+    leaves, treedef = jax.tree.flatten(args)
+    sig = tuple((tuple(np.shape(x)), str(np.asarray(x).dtype)) if eqx.is_array(x) else ("static", x)
+                for x in leaves)
+    return treedef, sig
+
+
+def compiled(fn, *args):
+    """AOT-compiled ``fn`` for these arguments, cached in-process by their structure.
+
+    Returns (executable, seconds spent compiling now; 0.0 when cached)."""
+    key = (fn, _signature(args))
+    hit = _COMPILED.get(key)
+    if hit is not None:
+        return hit, 0.0
+    t0 = time.perf_counter()
+    exe = fn.lower(*args).compile()
+    _COMPILED[key] = exe
+    return exe, time.perf_counter() - t0
+
+
 def _rows_until_failure(t_rows: np.ndarray, n_rows: int) -> int:
     """After a failure the state is frozen: rows stop advancing in time."""
     stalled = np.nonzero(np.diff(t_rows) <= 0.0)[0]
@@ -218,11 +256,11 @@ def _run_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, op
     program. Returns (segments, final loop, compile time, wall time, chunks run)."""
     init_fn, chunk_fn = (_init_single, _chunk_single) if batch is None else (_init_batch, _chunk_batch)
     t_end = t0 + n_int * sub * h
-    tc = time.perf_counter()
-    init_c = init_fn.lower(system, state, solver).compile()
+    init_c, c1 = compiled(init_fn, system, state, solver)
     loop, ctx = init_c(system, state, solver)
-    chunk_c = chunk_fn.lower(system, loop, ctx, solver, h, t_end, per_chunk, sub, options).compile()
-    compile_s = time.perf_counter() - tc
+    t_end = jnp.asarray(t_end)
+    chunk_c, c2 = compiled(chunk_fn, system, loop, ctx, solver, h, t_end, per_chunk, sub, options)
+    compile_s = c1 + c2
     tw = time.perf_counter()
     loop, ctx = init_c(system, state, solver)
     first = segment_of(loop) if batch is None else eqx.filter_vmap(segment_of)(loop)
@@ -319,9 +357,7 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
         raise ModelError("simulate_batch runs fixed-step solvers (generalized-alpha, rk4)")
     options = RunOptions(drift_tolerance=drift_tolerance, locate_crossings=locate_crossings,
                          max_halvings=_halvings(max_halvings))
-    n_chunks = min(n_int, 50) if chunks is None else max(1, min(int(chunks), n_int))
-    per_chunk = int(math.ceil(n_int / n_chunks))
-    n_chunks = int(math.ceil(n_int / per_chunk))
+    per_chunk, n_chunks = _chunking(n_int, sub, chunks)
     t0s = {float(s.t) for s in states}
     if len(t0s) != 1:
         raise ModelError("simulate_batch needs a common start time")
@@ -361,8 +397,8 @@ def _simulate_diffrax(system, state, solver, t0, n_int, out_dt, dt, per_chunk, n
     pad = per_chunk * n_chunks - n_int
     ts_all = np.concatenate([ts_all, ts_all[-1] + out_dt * np.arange(1, pad + 1)])
     tc = time.perf_counter()
-    chunk_c = _diffrax_chunk.lower(system, solver, context, y0, jnp.asarray(t0),
-                                   jnp.asarray(ts_all[:per_chunk]), jnp.asarray(dt)).compile()
+    chunk_c, _ = compiled(_diffrax_chunk, system, solver, context, y0, jnp.asarray(t0),
+                          jnp.asarray(ts_all[:per_chunk]), jnp.asarray(dt))
     status_fn = jax.jit(lambda sys, q, v, lam, t: jax.vmap(
         lambda qq, vv, ll, tt: step_status(sys, None, Carry(tt, qq, vv, qq, qq, ll, jnp.zeros(3), jnp.zeros(3)),
                                            jnp.array(True), options))(q, v, lam, t))
