@@ -79,7 +79,7 @@ def _chunking(n_intervals: int, substeps: int, chunks: int | None) -> tuple[int,
     """(intervals per chunk, number of chunks). By default a chunk is about
     STEPS_PER_CHUNK steps, so runs of different lengths share one compiled chunk."""
     if chunks is None:
-        per = max(1, min(n_intervals, int(math.ceil(STEPS_PER_CHUNK / substeps))))
+        per = max(1, int(math.ceil(STEPS_PER_CHUNK / substeps)))
     else:
         per = int(math.ceil(n_intervals / max(1, min(int(chunks), n_intervals))))
     return per, int(math.ceil(n_intervals / per))
@@ -256,6 +256,7 @@ def _run_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, op
     program. Returns (segments, final loop, compile time, wall time, chunks run)."""
     init_fn, chunk_fn = (_init_single, _chunk_single) if batch is None else (_init_batch, _chunk_batch)
     t_end = t0 + n_int * sub * h
+    h = jnp.asarray(h)  # traced: runs with other steps reuse the compiled program
     init_c, c1 = compiled(init_fn, system, state, solver)
     loop, ctx = init_c(system, state, solver)
     t_end = jnp.asarray(t_end)
@@ -265,14 +266,14 @@ def _run_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, op
     loop, ctx = init_c(system, state, solver)
     first = segment_of(loop) if batch is None else eqx.filter_vmap(segment_of)(loop)
     segs = [first]
-    bar = _progress(n_int * sub * h, progress, solver_name(solver) + ("" if batch is None else f" ×{batch}"))
+    bar = _progress(t_end - t0, progress, solver_name(solver) + ("" if batch is None else f" ×{batch}"))
     ran = 0
     for c in range(n_chunks):
         loop, seg = chunk_c(system, loop, ctx, solver, h, t_end, per_chunk, sub, options)
         jax.block_until_ready(seg.q)
         segs.append(seg)
         ran += 1
-        bar.update(min(per_chunk, n_int - c * per_chunk) * sub * h)
+        bar.update(min(per_chunk, n_int - c * per_chunk) * (t_end - t0) / n_int)
         if np.all(np.asarray(loop.status) != OK):
             break
     bar.close()

@@ -18,8 +18,9 @@ from ..model import Model, body_point, build_in_equilibrium, node
 from ..outputs import Output
 from ..section import Section
 
-#: parameters of M2 (SI), as in MODELS.md; I as printed in Table 2
-M2 = dict(length=4.02, span=3.8, n_elements=24, diameter=3e-3, area=7.068e-6,
+#: parameters of M2 (SI), as in MODELS.md; I as printed in Table 2; ``height`` lifts
+#: support B to (span, height) (0 in M2)
+M2 = dict(length=4.02, span=3.8, height=0.0, n_elements=24, diameter=3e-3, area=7.068e-6,
           second_moment=7.952e-12, youngs_modulus=200e9, cable_mass=0.148,
           trolley_mass=2.67, trolley_inertia=0.2242, cabin_mass=2.67, cabin_inertia=0.2242,
           hanger=0.5, s0=0.6, alpha=0.01, beta=0.0, gravity=9.81)
@@ -59,7 +60,7 @@ def m2_model(n_elements: int | None = None, *, formulation: Formulation | None =
     m = Model(gravity=(0.0, -p["gravity"]))
     section = Section(p["youngs_modulus"], p["area"], p["second_moment"],
                       p["cable_mass"] / p["length"], fibre_distance=p["diameter"] / 2)
-    guess = mesh.catenary_nodes((0.0, 0.0), (p["span"], 0.0), p["length"], n)
+    guess = mesh.catenary_nodes((0.0, 0.0), (p["span"], p["height"]), p["length"], n)
     m.add_beam("cable", mesh.straight((0.0, 0.0), (1.0, 0.0), p["length"], n), section,
                alpha=p["alpha"], beta=p["beta"], formulation=formulation, initial_nodes=guess)
     m.pin("A", node("cable", 0))
