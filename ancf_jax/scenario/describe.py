@@ -81,8 +81,9 @@ def _bounds(meta) -> str:
     return "".join(parts)
 
 
-def accepted(tp, info: FieldInfo | None = None, *, unit: bool = True) -> str:
-    """What a value of type ``tp`` (with the constraints of ``info``) may be."""
+def accepted(tp, info: FieldInfo | None = None, *, unit: bool = True, short: bool = False) -> str:
+    """What a value of type ``tp`` (with the constraints of ``info``) may be; ``short``:
+    the documentation's wording, which refers to the page's sections for long forms."""
     tp, meta = unwrap(tp)
     if info is not None:
         meta = meta + list(info.metadata) + ([info] if info.discriminator else [])
@@ -92,11 +93,11 @@ def accepted(tp, info: FieldInfo | None = None, *, unit: bool = True) -> str:
     suffix = f" [{u}]" if u else ""
     for m in meta:
         if isinstance(m, Accepts):
-            return m.text + suffix
+            return (m.short if short and m.short else m.text) + suffix
     if _is_union(tp) and discriminated_members(tp, meta) is None:
         inner = _non_none(tp)
         if inner is not None:
-            return accepted(inner, info, unit=unit)
+            return accepted(inner, info, unit=unit, short=short)
     members = discriminated_members(tp, meta)
     if members is not None:
         return f"a table with type = {_literal(members)}"
@@ -115,6 +116,8 @@ def accepted(tp, info: FieldInfo | None = None, *, unit: bool = True) -> str:
         value = typing.get_args(tp)[1]
         return f"a table of named entries, each {accepted(value, unit=False)}" + suffix
     if isinstance(tp, type) and issubclass(tp, BaseModel):
+        if short and getattr(tp, "accepts", None):
+            return tp.accepts
         return "a table with keys " + ", ".join(tp.model_fields)
     return str(tp)
 

@@ -85,7 +85,7 @@ def table(cls) -> str:
              "| key | accepted | unit | default | meaning |", "| --- | --- | --- | --- | --- |"]
     for name, field in cls.model_fields.items():
         unit = (field.json_schema_extra or {}).get("unit", "")
-        lines.append(f"| `{name}` | {_cell(accepted(field.annotation, field, unit=False))} | "
+        lines.append(f"| `{name}` | {_cell(accepted(field.annotation, field, unit=False, short=True))} | "
                      f"{unit or '—'} | {_default(field)} | {_cell(field.description or '')} |")
     return "\n".join(lines)
 

@@ -55,6 +55,8 @@ def parse_override(item: str) -> tuple[tuple[str, ...], object]:
     if not isinstance(item, str) or "=" not in item:
         raise ValueError("expected KEY=VALUE")
     key, _, value = item.partition("=")
+    if "\n" in value or "\r" in value:
+        raise ValueError("the value must be on one line")
     parts = tuple(p.strip() for p in key.strip().split("."))
     if not parts or any(not re.match(r"^[A-Za-z0-9_-]+$", p) for p in parts):
         raise ValueError(f"bad key path {key.strip()!r}")

@@ -11,7 +11,7 @@ are in :mod:`ancf_jax.scenario.checks`.
 
 from __future__ import annotations
 
-from typing import Annotated, Literal, Optional, Union
+from typing import Annotated, ClassVar, Literal, Optional, Union
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -43,6 +43,8 @@ class PointRef(Table):
     ``{ body = "b", local = [x, y] }``, ``{ body = "b", point = "p1" }`` (a named body
     point), ``{ beam = "a", node = -1 }`` (a node; −1 is the last) or
     ``{ beam = "a", s = 0.2 }`` (the material point at reference arc length s)."""
+
+    accepts: ClassVar[str] = "a point (see Points)"
 
     ground: Optional[Vec2] = key(None, unit="m", doc="a fixed point of the ground")
     body: Optional[str] = key(None, doc="a rigid body's name")

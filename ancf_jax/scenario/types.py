@@ -23,9 +23,11 @@ from .tables import PATH_RULE, TableError, table_from_csv, table_from_rows
 
 @dataclasses.dataclass(frozen=True)
 class Accepts:
-    """What a key accepts, in words (errors and docs)."""
+    """What a key accepts, in words: ``text`` for errors, ``short`` (if given) for the
+    documentation's tables, which explain the long forms once."""
 
     text: str
+    short: str | None = None
 
 
 def _is_number(x) -> bool:
@@ -125,7 +127,9 @@ def _time_function(value, info: ValidationInfo):
 
 
 TimeFunction = Annotated[Union[TimeFunctionSpec, str, float, dict],
-                         PlainValidator(_time_function), Accepts(TIME_FUNCTION_ACCEPTED)]
+                         PlainValidator(_time_function),
+                         Accepts(TIME_FUNCTION_ACCEPTED, "a time function: an expression in t, a number, "
+                                 "{ table = ... } or { file = ... } (see Time functions)")]
 
 
 def _quadrature(value):

@@ -44,6 +44,12 @@ def test_parse_override(item, path, value):
     assert parse_override(item) == (path, value)
 
 
+@pytest.mark.parametrize("item", ["solver", "=1", "solver..dt=1", "solver.d t=1", "solver.dt=1\nname = 'x'"])
+def test_bad_overrides(item):
+    with pytest.raises(ValueError):
+        parse_override(item)
+
+
 def test_overrides_reach_the_settings(no_build):
     with no_build():
         sc = load_scenario("m2", ["beams.cable.elements=12", "solver.t_end=0.5", "solver.rho_inf=0.8",
