@@ -253,11 +253,6 @@ class Checker:
 
     def solver(self):
         sol = self.spec.solver
-        allowed = S.SOLVER_OPTIONS[sol.name]
-        for k in sorted(set().union(*S.SOLVER_OPTIONS.values()), key=list(S.SolverSpec.model_fields).index):
-            if getattr(sol, k) is not None and k not in allowed:
-                raise Invalid(("solver", k), f'not an option of solver "{sol.name}"',
-                              f"options of {sol.name}: {', '.join(allowed)}")
         out = self.spec.outputs.dt
         if out is not None and out < sol.dt * (1 - 1e-9):
             raise Invalid(("outputs", "dt"), f"{out:g} s is shorter than solver.dt = {sol.dt:g} s",

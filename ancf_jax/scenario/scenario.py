@@ -80,7 +80,8 @@ class Scenario:
     def solver(self) -> RunSettings:
         """Run settings of ``[solver]`` and ``outputs.dt``."""
         s = self.spec.solver
-        options = {k: getattr(s, k) for k in S.SOLVER_OPTIONS[s.name] if getattr(s, k) is not None}
+        table = getattr(s, S.SOLVER_TABLES[s.name])
+        options = {k: v for k, v in table.model_dump().items() if v is not None}
         return RunSettings(s.name, s.dt, s.t_end, self.spec.outputs.dt, options, s.drift_tolerance,
                            s.locate_crossings)
 

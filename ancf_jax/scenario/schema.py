@@ -298,21 +298,51 @@ class ModalSpec(Table):
                        "the static equilibrium, with the stress stiffness")
 
 
-#: options of each solver (others are rejected for that solver)
-SOLVER_OPTIONS = {
-    "generalized-alpha": ("rho_inf", "newton_tol", "max_iterations", "refresh_every", "contraction",
-                          "velocity_projection", "dense"),
-    "rk4": ("projection", "baumgarte", "dense"),
-    "tsit5": ("rtol", "atol", "max_steps", "baumgarte", "dense"),
-    "dopri5": ("rtol", "atol", "max_steps", "baumgarte", "dense"),
-    "kvaerno5": ("rtol", "atol", "max_steps", "baumgarte", "dense"),
-}
+class GeneralizedAlphaOptions(Table):
+    """Options of the generalized-α solver (each defaults to the solver's own default)."""
+
+    rho_inf: Optional[float] = key(None, ge=0.0, le=1.0, allow_inf_nan=False,
+                                   doc="spectral radius at infinity (default 0.9)")
+    newton_tol: Optional[float] = key(None, unit="m", gt=0.0, allow_inf_nan=False,
+                                      doc="Newton tolerance on the position correction (default 1e-10)")
+    max_iterations: Optional[int] = key(None, ge=1, le=1000, doc="Newton iterations per step (default 16)")
+    refresh_every: Optional[int] = key(None, ge=1, le=1000,
+                                       doc="refactor after this many iterations (default 6)")
+    contraction: Optional[float] = key(None, gt=0.0, lt=1.0, allow_inf_nan=False,
+                                       doc="refactor when a correction shrinks by less (default 0.25)")
+    velocity_projection: Optional[bool] = key(None, doc="project velocities onto the constraints (default true)")
+    dense: Optional[bool] = key(None, doc="dense LU instead of the block-tridiagonal solver (default false)")
+
+
+class RK4Options(Table):
+    """Options of the RK4 solver."""
+
+    projection: Optional[bool] = key(None, doc="project onto the constraints after each step (default true)")
+    baumgarte: Optional[float] = key(None, unit="rad/s", ge=0.0, allow_inf_nan=False,
+                                     doc="Baumgarte ω (default 0)")
+    dense: Optional[bool] = key(None, doc="dense LU instead of the block-tridiagonal solver (default false)")
+
+
+class DiffraxOptions(Table):
+    """Options of the adaptive diffrax solvers (tsit5, dopri5, kvaerno5)."""
+
+    rtol: Optional[float] = key(None, gt=0.0, allow_inf_nan=False, doc="relative tolerance (default 1e-6)")
+    atol: Optional[float] = key(None, gt=0.0, allow_inf_nan=False, doc="absolute tolerance (default 1e-8)")
+    max_steps: Optional[int] = key(None, ge=1, doc="steps per output chunk (default 1e7)")
+    baumgarte: Optional[float] = key(None, unit="rad/s", ge=0.0, allow_inf_nan=False,
+                                     doc="Baumgarte ω (default 50)")
+    dense: Optional[bool] = key(None, doc="dense LU instead of the block-tridiagonal solver (default false)")
+
+
+#: the options table that applies to each solver (the others are checked, not used)
+SOLVER_TABLES = {"generalized-alpha": "generalized_alpha", "rk4": "rk4", "tsit5": "diffrax",
+                 "dopri5": "diffrax", "kvaerno5": "diffrax"}
 
 
 class SolverSpec(Table):
-    """Time integration: solver, step, span and tolerances. Options other than name,
-    dt, t_end, drift_tolerance and locate_crossings apply to some solvers only
-    (see the table of solver options)."""
+    """Time integration: solver, step, span and tolerances. Each solver has its own
+    options table; only the chosen solver's table is used, so `--set solver.name=...`
+    switches solvers without editing the file."""
 
     name: Literal[SOLVERS] = key("generalized-alpha", doc="time integrator")
     dt: float = key(1e-3, unit="s", gt=0.0, allow_inf_nan=False,
@@ -321,24 +351,10 @@ class SolverSpec(Table):
     drift_tolerance: float = key(1e-6, unit="m", gt=0.0, allow_inf_nan=False,
                                  doc="stop when max|Φ| exceeds this")
     locate_crossings: bool = key(False, doc="split steps at node crossings of sliding joints")
-    rho_inf: Optional[float] = key(None, ge=0.0, le=1.0, allow_inf_nan=False,
-                                   doc="generalized-alpha: spectral radius at infinity (default 0.9)")
-    newton_tol: Optional[float] = key(None, unit="m", gt=0.0, allow_inf_nan=False,
-                                      doc="generalized-alpha: Newton tolerance (default 1e-10)")
-    max_iterations: Optional[int] = key(None, ge=1, le=1000,
-                                        doc="generalized-alpha: Newton iterations per step (default 16)")
-    refresh_every: Optional[int] = key(None, ge=1, le=1000,
-                                       doc="generalized-alpha: refactor after this many iterations (default 6)")
-    contraction: Optional[float] = key(None, gt=0.0, lt=1.0, allow_inf_nan=False,
-                                       doc="generalized-alpha: refactor when a correction shrinks less (default 0.25)")
-    velocity_projection: Optional[bool] = key(None, doc="generalized-alpha: project velocities (default true)")
-    projection: Optional[bool] = key(None, doc="rk4: project onto the constraints each step (default true)")
-    baumgarte: Optional[float] = key(None, unit="rad/s", ge=0.0, allow_inf_nan=False,
-                                     doc="rk4, diffrax: Baumgarte ω (default 0 for rk4, 50 for diffrax)")
-    rtol: Optional[float] = key(None, gt=0.0, allow_inf_nan=False, doc="diffrax: relative tolerance (default 1e-6)")
-    atol: Optional[float] = key(None, gt=0.0, allow_inf_nan=False, doc="diffrax: absolute tolerance (default 1e-8)")
-    max_steps: Optional[int] = key(None, ge=1, doc="diffrax: steps per output chunk (default 1e7)")
-    dense: Optional[bool] = key(None, doc="dense LU instead of the block-tridiagonal solver (default false)")
+    generalized_alpha: GeneralizedAlphaOptions = key(GeneralizedAlphaOptions(),
+                                                     doc="options used when name = generalized-alpha")
+    rk4: RK4Options = key(RK4Options(), doc="options used when name = rk4")
+    diffrax: DiffraxOptions = key(DiffraxOptions(), doc="options used when name = tsit5, dopri5 or kvaerno5")
 
 
 # ----------------------------------------------------------------------------- outputs

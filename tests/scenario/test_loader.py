@@ -52,7 +52,7 @@ def test_bad_overrides(item):
 
 def test_overrides_reach_the_settings(no_build):
     with no_build():
-        sc = load_scenario("m2", ["beams.cable.elements=12", "solver.t_end=0.5", "solver.rho_inf=0.8",
+        sc = load_scenario("m2", ["beams.cable.elements=12", "solver.t_end=0.5", "solver.generalized_alpha.rho_inf=0.8",
                                   "outputs.dt=0.05", "joints.slider.s=1.0"])
     assert sc.beam_elements == {"cable": 12}
     assert sc.spec.joints["slider"].s == 1.0
@@ -61,6 +61,13 @@ def test_overrides_reach_the_settings(no_build):
                                          solver_options={"rho_inf": 0.8, "max_iterations": 30},
                                          drift_tolerance=1e-6, locate_crossings=False)
     assert "beams.cable.elements=12" in sc.summary()
+
+
+def test_switching_solver_keeps_each_solvers_options(no_build):
+    with no_build():
+        sc = load_scenario("m2", ["solver.name=rk4", "solver.rk4.baumgarte=10"])
+    assert sc.solver.solver == "rk4" and sc.solver.solver_options == {"baumgarte": 10.0}
+    assert sc.spec.solver.generalized_alpha.rho_inf == 0.5
 
 
 def test_override_creates_missing_tables(tmp_path, no_build):
