@@ -79,6 +79,13 @@ def test_m2_starts_at_rest_with_the_cabin_hanging_below_the_trolley(m2_built):
     assert abs(cabin[2]) < 1e-9
 
 
+def test_m2_with_the_trolley_held_for_the_run(m2_built):
+    (_, state), _ = m2_built
+    system, held_state = load_scenario("m2", ["joints.slider.hold=true"]).build()
+    assert [c.name for c in system.constraints][-1] == "slider.hold"
+    assert_identical(held_state, state)  # the same equilibrium: it is always found with the hold
+
+
 def elastica_tip(load_ratio: float):
     """Tip (x, y)/L of a clamped elastica under a transverse tip load with PL²/EI =
     ``load_ratio`` (shooting on EI θ'' = P cos θ, θ(0) = 0, θ'(L) = 0)."""
