@@ -98,7 +98,8 @@ def time_grid(t_end: float, dt: float, output_dt: float | None):
     dt = check_positive("dt", dt, "s")
     output_dt = dt if output_dt is None else check_positive("output_dt", output_dt, "s")
     if output_dt < dt * (1 - 1e-9):
-        output_dt = dt
+        raise ModelError(f"output_dt must be >= dt = {dt:g} s (outputs are taken at steps), "
+                         f"got {output_dt:g} s")
     n_intervals = max(1, int(round(t_end / output_dt)))
     output_dt = t_end / n_intervals
     substeps = max(1, int(math.ceil(output_dt / dt * (1 - 1e-9))))
