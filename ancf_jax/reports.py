@@ -29,12 +29,13 @@ def _times(t_end: float, count: int) -> list[float]:
 
 
 # ---------------------------------------------------------------------------- M1
-def report_m1(results: Results, out_dir: str | Path, *, figures: bool = True) -> dict:
+def report_m1(results: Results, out_dir: str | Path, *, figures: bool = True,
+              outputs=m1_def.OUTPUTS) -> dict:
     """Write M1's CSV, NPZ, summary and Figs. 5–8 into ``out_dir``."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     n = int(results.system.beams[0].mesh.n_elements)
-    cols = evaluate(results, m1_def.OUTPUTS)
+    cols = evaluate(results, outputs)
     write_csv(out / f"m1_n{n}.csv", cols)
     sig_approx = results.element_stress("beam", m1_def.STRESS_ELEMENT, m1_def.STRESS_XI,
                                         m1_def.STRESS_FIBRE, "small_strain")
@@ -78,7 +79,7 @@ def report_m1(results: Results, out_dir: str | Path, *, figures: bool = True) ->
 
 # ---------------------------------------------------------------------------- M2
 def report_m2(runs: dict[int, Results], out_dir: str | Path, *, figures: bool = True,
-              animate: bool = False) -> dict:
+              animate: bool = False, outputs=m2_def.OUTPUTS) -> dict:
     """Write M2's per-mesh CSV/NPZ, the summary and Figs. 12–13 into ``out_dir``.
 
     ``runs`` maps element count → results. The summary states the distances between
@@ -91,7 +92,7 @@ def report_m2(runs: dict[int, Results], out_dir: str | Path, *, figures: bool = 
     cols_all = {}
     for n in counts:
         r = runs[n]
-        cols = evaluate(r, m2_def.OUTPUTS)
+        cols = evaluate(r, outputs)
         cols_all[n] = cols
         write_csv(out / f"m2_n{n}.csv", cols)
         reaction = r.sliding_reaction("slider")
@@ -151,4 +152,54 @@ def report_m2(runs: dict[int, Results], out_dir: str | Path, *, figures: bool = 
                                 links=(("trolley", "cabin"),), title=f"M2, {ref} elements")
         summary["animation"] = path.name
         _json(out / "summary.json", summary)
+    return summary
+
+
+# ---------------------------------------------------------------------------- any scenario
+def report_scenario(name: str, runs: dict, outputs, out_dir: str | Path, *, figures: bool = True,
+                    animate: bool = False) -> dict:
+    """Write CSV/NPZ per run, ``summary.json`` and default figures for any scenario.
+
+    ``runs`` maps a label (the element count of a one-beam scenario, or "") to results;
+    files are ``{name}.csv`` or ``{name}_n{N}.csv``.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    per = {}
+    for label, r in runs.items():
+        stem = f"{name}_n{label}" if label != "" else name
+        cols = evaluate(r, outputs)
+        write_csv(out / f"{stem}.csv", cols)
+        extra = {}
+        for b in r.system.beam_names:
+            s, sigma = r.stress_along(b, 11)
+            extra[f"stress_s_{b}"], extra[f"stress_sigma_{b}"] = s, sigma
+        r.save_npz(out / f"{stem}.npz", **extra)
+        base = r.summary()
+        entry = dict(base)
+        entry.update({f"{k}_min": float(np.min(v)) for k, v in cols.items() if k != "t"})
+        entry.update({f"{k}_max": float(np.max(v)) for k, v in cols.items() if k != "t"})
+        entry["max_abs_bending_stress"] = {b: float(np.nanmax(np.abs(extra[f"stress_sigma_{b}"])))
+                                           for b in r.system.beam_names}
+        per[str(label) if label != "" else name] = entry
+        if figures:
+            series = {k: v for k, v in cols.items() if k != "t"}
+            if series:
+                for k, v in list(series.items())[:12]:
+                    plotting.time_history(r.t, {k: v}, ylabel=k, title=f"{name}: {k}",
+                                          path=out / f"{stem}_{k}.png")
+            t_end = float(r.t[-1])
+            for b in r.system.beam_names:
+                plotting.deformed_shapes(r, b, _times(t_end, 7), bodies=r.system.body_names,
+                                         title=f"{name}: {b} at chosen times",
+                                         path=out / f"{stem}_shapes_{b}.png")
+                plotting.stress_map(r.t, extra[f"stress_s_{b}"], extra[f"stress_sigma_{b}"],
+                                    title=f"{name}: bending stress along {b}",
+                                    path=out / f"{stem}_stress_{b}.png")
+        if animate and r.system.beam_names:
+            path = plotting.animate(r, r.system.beam_names[0], out / f"{stem}.gif",
+                                    bodies=r.system.body_names, title=name)
+            entry["animation"] = path.name
+    summary = dict(model=name, runs=per)
+    _json(out / "summary.json", summary)
     return summary

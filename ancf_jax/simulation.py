@@ -260,8 +260,8 @@ def _run_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, op
     h = jnp.asarray(h)  # traced: runs with other steps reuse the compiled program
     init_c, c1 = compiled(init_fn, system, state, solver)
     loop, ctx = init_c(system, state, solver)
-    t_end = jnp.asarray(t_end)
-    chunk_c, c2 = compiled(chunk_fn, system, loop, ctx, solver, h, t_end, per_chunk, sub, options)
+    t_stop = jnp.asarray(t_end)
+    chunk_c, c2 = compiled(chunk_fn, system, loop, ctx, solver, h, t_stop, per_chunk, sub, options)
     compile_s = c1 + c2
     tw = time.perf_counter()
     loop, ctx = init_c(system, state, solver)
@@ -270,7 +270,7 @@ def _run_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, op
     bar = _progress(t_end - t0, progress, solver_name(solver) + ("" if batch is None else f" ×{batch}"))
     ran = 0
     for c in range(n_chunks):
-        loop, seg = chunk_c(system, loop, ctx, solver, h, t_end, per_chunk, sub, options)
+        loop, seg = chunk_c(system, loop, ctx, solver, h, t_stop, per_chunk, sub, options)
         jax.block_until_ready(seg.q)
         segs.append(seg)
         ran += 1

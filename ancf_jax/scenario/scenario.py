@@ -110,8 +110,9 @@ class Scenario:
         """A fresh :class:`~ancf_jax.model.Model` of the scenario."""
         return make_model(self.spec, str(self.path))
 
-    def build(self) -> tuple[System, State]:
-        """``(system, initial state)``.
+    def build(self, *, pad_to=None) -> tuple[System, State]:
+        """``(system, initial state)``; ``pad_to`` pads beams (see
+        :meth:`ancf_jax.model.Model.build`) so that systems batch under ``vmap``.
 
         ``initial.mode = "given"``: the state as written, assembled onto the joints.
         ``"static"``: the static equilibrium under the loads at t = 0 with every sliding
@@ -120,11 +121,11 @@ class Scenario:
         """
         model = self.model()
         if self.initial_mode == "given":
-            return model.build()
+            return model.build(pad_to=pad_to)
         system, state, _ = build_in_equilibrium(model, load_steps=self.statics.load_steps,
-                                                tolerance=self.statics.tolerance)
+                                                tolerance=self.statics.tolerance, pad_to=pad_to)
         if any(j.type == "sliding" and j.hold for j in self.spec.joints.values()):
-            system, _ = model.build(assemble=False)
+            system, _ = model.build(assemble=False, pad_to=pad_to)
         return system, state
 
     def simulate(self, **overrides) -> Results:
