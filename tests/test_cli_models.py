@@ -83,7 +83,7 @@ def test_static_m2_json_keys(capsys):
 
 def test_run_any_scenario_file_with_overrides(tmp_path, capsys):
     out = tmp_path / "pend"
-    argv = ["run", "flexible_pendulum", "--set", "beams.beam.elements=4", "--t-end", "0.01",
+    argv = ["run", "flexible_pendulum", "--set", "beams.pendulum.elements=4", "--t-end", "0.01",
             "--out", str(out), "--no-progress"]
     assert main(argv) == 0
     summary = json.loads((out / "summary.json").read_text())
