@@ -1,6 +1,7 @@
 """Cross-check ancf_jax against Exudyn on M1, M2 and H1 (identical discrete problems).
 
-    python -m benchmarks.compare_exudyn [--quick] [--out PATH]
+    python -m benchmarks.compare_exudyn [--quick] [--out PATH] [--models M1,M2,H1]
+    python -m benchmarks.compare_exudyn --timing
 
 Both codes integrate the same model (Exudyn's twin is translated from the ancf_jax
 system, :mod:`benchmarks.exudyn_models`) with the same formulation (|r'| − 1, material
@@ -80,15 +81,17 @@ def differences(a: dict, b: dict, n: int) -> dict:
     return out
 
 
-def _case(name, n, integration, t_end, initial, *, dt, output_dt, cancel=False, ancf=None):
+def _case(name, n, integration, t_end, initial, *, dt, output_dt, cancel=False, ancf=None,
+          exudyn_options=None):
     from . import exudyn_models as em
     system, state = initial
     if ancf is None:
         ancf = ancf_run(name, system, state, t_end=t_end, dt=dt, output_dt=output_dt,
                         rho_inf=SETTINGS["rho_inf"], **SETTINGS["ancf"])
     model = em.build_exudyn(system, state, name=name, cancel_sliding_term=cancel)
+    options = {**SETTINGS["exudyn"], **(exudyn_options or {})}
     exu_run = em.run(model, t_end=t_end, dt=dt, output_dt=output_dt, rho_inf=SETTINGS["rho_inf"],
-                     on_failure="return", **SETTINGS["exudyn"])
+                     on_failure="return", **options)
     # compare the leading output times both codes reached (after a failure ancf_jax may
     # return one more row at the failure time, off the output grid)
     n_min = min(len(ancf["t"]), len(exu_run.t))
@@ -119,24 +122,53 @@ def _print_row(row):
           f"exudyn {row['exudyn']['wall_time_s']:.2f} s){fail}", flush=True)
 
 
+def timing() -> list:
+    """Exudyn run times under its own solver choices (no agreement check): modified vs
+    full Newton, dense vs sparse LU, on M1 (24 elements, 2 s), M2 (24, 3 s, as shipped)
+    and H1 (32, 1 s), h = 1 ms, ρ∞ = 0.9, default Newton tolerances."""
+    from . import exudyn_models as em
+    rows = []
+    for name, n, t_end in (("M1", 24, 2.0), ("M2", 24, 3.0), ("H1", 32, 1.0)):
+        initial = em.ancf_system(name, n)
+        for modified in (True, False):
+            for solver in ("EXUdense", "EigenSparse"):
+                model = em.build_exudyn(*initial, name=name)
+                r = em.run(model, t_end=t_end, dt=SETTINGS["dt"], output_dt=SETTINGS["output_dt"],
+                           modified_newton=modified, linear_solver=solver, max_iterations=50,
+                           on_failure="return")
+                rows.append(dict(model=name, n_elements=n, t_end=t_end, modified_newton=modified,
+                                 linear_solver=solver, status=r.status, wall_time_s=r.wall_time_s,
+                                 setup_time_s=r.setup_time_s, newton_iterations=r.newton_iterations,
+                                 jacobians=r.jacobians))
+                print(f"{name} n={n} {'modified' if modified else 'full':>8} Newton, {solver:<11}: "
+                      f"{r.wall_time_s:6.2f} s ({r.newton_iterations} iterations, {r.jacobians} "
+                      f"Jacobians, {r.status})", flush=True)
+    return rows
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="short spans, smallest meshes")
     parser.add_argument("--out", type=Path, default=None,
                         help=f"JSON output (default {DEFAULT_OUT}; --quick: not written unless given)")
     parser.add_argument("--models", default="M1,M2,H1", help="comma-separated subset of M1,M2,H1")
+    parser.add_argument("--timing", action="store_true",
+                        help="only time Exudyn's solver options (printed, not written)")
     args = parser.parse_args(argv)
     try:
         import exudyn
     except ImportError:
         print("exudyn is not installed: nothing to compare (pip install 'ancf_jax[bench]').")
         return 0
+    if args.timing:
+        timing()
+        return 0
     from . import exudyn_models as em
 
     plan = QUICK if args.quick else FULL
     models = [m.strip() for m in args.models.split(",") if m.strip()]
     dt, output_dt = SETTINGS["dt"], SETTINGS["output_dt"]
-    rows, study = [], []
+    rows, study, crossing = [], [], []
     t_start = time.perf_counter()
     for name in models:
         for case in plan[name]:
@@ -167,11 +199,22 @@ def main(argv=None) -> int:
                               f"{ra['max_difference']['point1']:.2e} m, s {ra['max_difference']['s']:.2e} m;"
                               f" cancelled point1 {rc['max_difference']['point1']:.2e} m "
                               f"(status ancf/exudyn/exudyn-cancelled: {study[-1]['status']})", flush=True)
+                    # node crossings: Exudyn's default discontinuous.iterationTolerance
+                    # (1 m) keeps the crossing step on the extrapolated old element
+                    for tol in (1e-12, 1.0):
+                        rd, _ = _case(name, n, integ, 1.0, initial, dt=dt, output_dt=output_dt,
+                                      cancel=True, exudyn_options=dict(discontinuous_tolerance=tol))
+                        crossing.append(dict(discontinuous_tolerance=tol, t_compared=rd["t_compared"],
+                                             max_difference=rd["max_difference"]))
+                        print(f"  M2 n=12 cancelled, discontinuous tolerance {tol:g}, over "
+                              f"{rd['t_compared']:.2f} s: point1 {rd['max_difference']['point1']:.2e} m, "
+                              f"s {rd['max_difference']['s']:.2e} m", flush=True)
     report = dict(
         command="python -m benchmarks.compare_exudyn" + (" --quick" if args.quick else ""),
         exudyn_version=exudyn.__version__, python=platform.python_version(),
         machine=platform.machine(), settings=SETTINGS, exudyn_rules=em.EXUDYN_RULES,
-        cases=rows, sliding_term_step_study=study, total_time_s=time.perf_counter() - t_start,
+        cases=rows, sliding_term_step_study=study, node_crossing_study=crossing,
+        total_time_s=time.perf_counter() - t_start,
     )
     out = args.out if args.out is not None else (None if args.quick else DEFAULT_OUT)
     if out is not None:

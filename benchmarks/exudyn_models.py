@@ -211,6 +211,8 @@ def _mass_matrix(mbs) -> np.ndarray:
     """Exudyn's own system mass matrix (ODE2 coordinates), computed without a run."""
     ss = exu.SimulationSettings()
     ss.staticSolver.verboseMode = 0
+    ss.solution.file.write = False
+    ss.solution.sensors.active = False
     solver = exu.MainSolverStatic()
     solver.InitializeSolver(mbs, ss)
     solver.ComputeMassMatrix(mbs)
@@ -802,7 +804,7 @@ def run(model: ExudynModel, *, t_end: float, dt: float, output_dt: float | None 
     outputs = model_outputs(model.name, model.system, hist, model.integration) if model.name in MODELS else {}
     return ExudynRun(name=model.name, t=t_grid[:n_t], outputs=outputs, histories=hist,
                      wall_time_s=wall, setup_time_s=model.setup_time_s,
-                     steps=int(it.currentStepIndex) if it is not None else -1,
+                     steps=n_steps if status == "ok" else int(round((failure_time or 0.0) / h)) - 1,
                      newton_iterations=int(it.newtonStepsCount) if it is not None else -1,
                      jacobians=int(it.newtonJacobiCount) if it is not None else -1,
                      status=status, failure_time=failure_time, message=message, settings=settings)

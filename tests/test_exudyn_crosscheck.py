@@ -32,6 +32,8 @@ def _exudyn_element(q, ref, length, ea, ei, rho_a, mode):
     solver = exu.MainSolverStatic()
     ss = exu.SimulationSettings()
     ss.staticSolver.verboseMode = 0
+    ss.solution.file.write = False
+    ss.solution.sensors.active = False
     solver.InitializeSolver(mbs, ss)
     solver.ComputeODE2RHS(mbs)
     rhs = np.array(solver.GetSystemResidual())[:8]
