@@ -19,7 +19,9 @@ one; a fixed step that straddles the crossing loses order. With
 ``locate_crossings=True`` a step that changes the element of a sliding coordinate is
 split: the crossing fraction θ is found by regula falsi (Illinois) on
 θ ↦ s(step(θ h)) − s_node, the step is taken to just past the node and then
-completed.
+completed. (Crossing location and step retries are solver internals written as while
+loops; gradients by reverse mode need both off, which is the default of
+:func:`ancf_jax.simulation.trajectory`.)
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from .integrators.base import DRIFT, LEFT_BEAM, NAN, NEWTON, OK, AbstractIntegrator, Carry
+from .integrators.base import DRIFT, LEFT_BEAM, NAN, NEWTON, OK, AbstractIntegrator, Carry, StepInfo, run_if
 from .joints import SlidingJoint
 from .system import State, System
 
@@ -40,11 +42,16 @@ class RunOptions(eqx.Module):
         drift_tolerance: largest accepted constraint violation max|Φ| [m] (and rad).
         locate_crossings: split steps at node crossings of sliding joints.
         crossing_iterations: regula-falsi iterations to locate a crossing.
+        max_halvings: when a step fails (Newton not converged, non-finite state), redo
+            it in substeps, halving down to h / 2^max_halvings and growing back after
+            successes (0: no retries; a ``while_loop``, so reverse-mode differentiation
+            needs 0).
     """
 
     drift_tolerance: float = eqx.field(static=True, default=1e-6)
     locate_crossings: bool = eqx.field(static=True, default=False)
     crossing_iterations: int = eqx.field(static=True, default=6)
+    max_halvings: int = eqx.field(static=True, default=0)
 
 
 class Segment(eqx.Module):
@@ -161,20 +168,48 @@ def _crossing(system, integrator, carry, new, h, context, options):
         cs, infos = jax.lax.scan(sub, carry, jnp.stack([theta * h, (1.0 - theta) * h]))
         return cs, infos.iterations.sum().astype(jnp.int32), infos.converged.all()
 
-    def keep():
-        return new, jnp.zeros((), jnp.int32), jnp.array(True)
-
     del jsel
-    out, iters, conv = jax.lax.cond(jnp.any(crossed), branch, keep)
+    out, iters, conv = run_if(jnp.any(crossed), lambda _: branch(),
+                              (new, jnp.zeros((), jnp.int32), jnp.array(True)))
     return out, (iters, conv), jnp.any(crossed)
 
 
+def _retry_in_substeps(system, integrator, carry, h, context, options, need):
+    """Redo a failed step of size h as a sequence of smaller steps (see RunOptions),
+    where ``need`` is set (a while loop: under vmap only members that need it work).
+
+    Returns (carry, iterations, converged)."""
+    h_min = h / 2.0**options.max_halvings
+
+    def cond(st):
+        c, done, h_try, _, ok = st
+        return ok & (done < h * (1.0 - 1e-12))
+
+    def body(st):
+        c, done, h_try, iters, _ = st
+        dt = jnp.minimum(h_try, h - done)
+        new, info = integrator.step(system, c, dt, context)
+        good = (info.converged & jnp.all(jnp.isfinite(new.q)) & jnp.all(jnp.isfinite(new.v))
+                & jnp.all(jnp.isfinite(new.lam)))
+        c = jax.tree.map(lambda a, b: jnp.where(good, a, b), new, c)
+        done = jnp.where(good, done + dt, done)
+        h_next = jnp.where(good, jnp.minimum(2.0 * h_try, h), 0.5 * h_try)
+        ok = good | (0.5 * h_try >= h_min * (1.0 - 1e-12))
+        return c, done, h_next, iters + info.iterations, ok
+
+    c, done, _, iters, ok = jax.lax.while_loop(
+        cond, body, (carry, jnp.where(need, 0.0, h), 0.5 * h, jnp.zeros((), jnp.int32), need))
+    return c, iters, done >= h * (1.0 - 1e-12)
+
+
 def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopState, context,
-                    h, *, n_intervals: int, substeps: int, options: RunOptions = RunOptions()):
+                    h, *, n_intervals: int, substeps: int, options: RunOptions = RunOptions(),
+                    t_stop=jnp.inf):
     """Advance ``loop`` by ``n_intervals`` × ``substeps`` steps of size h.
 
-    Returns (final LoopState, Segment with one entry per interval). Jittable and
-    vmappable; n_intervals and substeps are static.
+    Steps that would start at or after ``t_stop`` are skipped (so a run split into
+    equal chunks ends exactly at its end time). Returns (final LoopState, Segment with
+    one entry per interval). Jittable and vmappable; n_intervals and substeps are static.
     """
 
     def one_step(c, _):
@@ -182,6 +217,11 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
 
         def advance():
             new, info = integrator.step(system, loop.carry, h, context)
+            if options.max_halvings:
+                fine = (info.converged & jnp.all(jnp.isfinite(new.q)) & jnp.all(jnp.isfinite(new.v)))
+                c, it, conv = _retry_in_substeps(system, integrator, loop.carry, h, context, options, ~fine)
+                new = jax.tree.map(lambda a, b: jnp.where(fine, a, b), new, c)
+                info = StepInfo(info.iterations + it, fine | conv)
             new2, extra, crossed = _crossing(system, integrator, loop.carry, new, h, context, options)
             it = info.iterations
             conv = info.converged
@@ -197,7 +237,8 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
         def frozen():
             return loop, iters, maxit, ncross
 
-        return jax.lax.cond(loop.status == OK, advance, frozen), None
+        active = (loop.status == OK) & (loop.carry.t < t_stop - 0.5 * h)
+        return jax.lax.cond(active, advance, frozen), None
 
     def interval(loop, _):
         zero = jnp.zeros((), jnp.int32)

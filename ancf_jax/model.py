@@ -304,7 +304,7 @@ class Model:
 
         def arc_ok(name, s, what, label="arc length"):
             length = self._beam_length(name)
-            if not 0.0 <= s <= length:
+            if not 0.0 <= s <= length * (1.0 + 1e-12):
                 raise ModelError(f"{what}: {label} {s} is outside beam {name!r} "
                                  f"(accepted 0..{length:g} m)")
 
@@ -581,7 +581,7 @@ def assemble_state(system: System, state: State, *, tolerance: float = 1e-10,
 
 
 def build_in_equilibrium(model: Model, *, load_steps: int = 10, pad_to=None,
-                         tolerance: float = 1e-9):
+                         tolerance: float = 1e-9, check_stability: bool = True):
     """Static equilibrium with every sliding joint held, then released.
 
     Builds the system with the holds (``hold=True``), solves the statics from the
@@ -589,12 +589,29 @@ def build_in_equilibrium(model: Model, *, load_steps: int = 10, pad_to=None,
     equilibrium at rest as its initial state (paper §4.3: the trolley is released at
     t = 0).
 
+    Newton's method converges to stable and unstable equilibria alike (e.g. a cabin
+    standing upside down on its hinge); with ``check_stability`` the tangent stiffness
+    of the held equilibrium is checked (constraints eliminated, as in modal analysis)
+    and an unstable equilibrium raises a :class:`~ancf_jax.errors.StaticsError`.
+
     Returns:
         (released system, initial State, StaticSolution of the held system).
     """
+    from .errors import StaticsError
+    from .modal import modal_analysis
     from .statics import solve_static
     held, guess = model.build(pad_to=pad_to, hold=True)
     sol = solve_static(held, guess, load_steps=load_steps, tolerance=tolerance)
+    if check_stability:
+        w = modal_analysis(held, sol.state.q, sol.multipliers).angular_frequencies
+        w2 = np.sign(w) * w * w
+        worst = float(w2.min())
+        if worst < -max(1e-12 * float(np.abs(w2).max()), 1e-9):
+            raise StaticsError(
+                "the static solution is an unstable equilibrium (a mode with negative "
+                f"stiffness, omega^2 = {worst:.3g} 1/s^2, e.g. a hanging body turned upside "
+                "down); start from a better initial guess", load_step=load_steps - 1,
+                load_factor=1.0, residual=float(sol.residuals[-1]), state=sol.state)
     released, _ = model.build(pad_to=pad_to, hold=False, assemble=False)
     state = State(sol.state.q, jnp.zeros_like(sol.state.q), jnp.zeros(()))
     return released, state, sol

@@ -50,6 +50,8 @@ class Output:
         element, xi: element index (0-based) and ξ = x/l ∈ [0, 1] (``"stress"``).
         fibre: fibre distance y [m] (``"stress"``; default the outer fibre).
         measure: curvature measure of a stress (``"exact"``, ``"small_strain"``).
+        local: body-frame point [m] (``"body"``, components x, y): its position instead
+            of the centre's.
     """
 
     name: str
@@ -62,6 +64,7 @@ class Output:
     xi: Optional[float] = None
     fibre: Optional[float] = None
     measure: str = "exact"
+    local: Optional[tuple] = None
 
     def __post_init__(self):
         if self.kind not in KINDS:
@@ -84,7 +87,13 @@ def evaluate(results: Results, outputs: Iterable[Output]) -> dict[str, np.ndarra
         elif o.kind == "point":
             val = results.point(o.target, float(o.s))[:, "xy".index(o.component)]
         elif o.kind == "body":
-            val = results.body(o.target)[:, "x y theta".split().index(o.component)]
+            pose = results.body(o.target)
+            if o.local is not None and o.component != "theta":
+                c, s = np.cos(pose[:, 2]), np.sin(pose[:, 2])
+                lx, ly = o.local
+                val = pose[:, 0] + c * lx - s * ly if o.component == "x" else pose[:, 1] + s * lx + c * ly
+            else:
+                val = pose[:, "x y theta".split().index(o.component)]
         elif o.kind == "sliding":
             val = results.sliding(o.target)
         elif o.kind == "sliding_point":

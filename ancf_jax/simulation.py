@@ -72,6 +72,42 @@ def solver_name(solver) -> str:
     return type(solver).__name__
 
 
+STEPS_PER_CHUNK = 500
+
+
+def _chunking(n_intervals: int, substeps: int, chunks: int | None) -> tuple[int, int]:
+    """(intervals per chunk, number of chunks). By default a chunk is about
+    STEPS_PER_CHUNK steps, so runs of different lengths share one compiled chunk."""
+    if chunks is None:
+        per = max(1, int(math.ceil(STEPS_PER_CHUNK / substeps)))
+    else:
+        per = int(math.ceil(n_intervals / max(1, min(int(chunks), n_intervals))))
+    return per, int(math.ceil(n_intervals / per))
+
+
+def _prepare(t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings,
+             on_failure, chunks, solver_options):
+    """Check the run arguments (before anything is compiled) and derive the solver
+    instance, RunOptions, time grid and chunking."""
+    if on_failure not in ("raise", "return"):
+        raise ModelError(f"on_failure must be 'raise' or 'return', got {on_failure!r}")
+    check_positive("drift_tolerance", drift_tolerance, "m")
+    grid = time_grid(t_end, dt, output_dt)
+    if isinstance(solver, str):
+        solver = make_solver(solver, **(solver_options or {}))
+    elif solver_options:
+        raise ModelError("solver_options apply to solvers given by name")
+    options = RunOptions(drift_tolerance=drift_tolerance, locate_crossings=locate_crossings,
+                         max_halvings=_halvings(max_halvings))
+    return solver, options, grid, _chunking(grid[0], grid[1], chunks)
+
+
+def _halvings(value) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 <= value <= 30:
+        raise ModelError(f"max_halvings must be an integer in 0..30, got {value!r}")
+    return int(value)
+
+
 def time_grid(t_end: float, dt: float, output_dt: float | None):
     """(n_intervals, substeps, h, output_dt): outputs every output_dt, each interval
     split into equal substeps h <= dt."""
@@ -79,7 +115,8 @@ def time_grid(t_end: float, dt: float, output_dt: float | None):
     dt = check_positive("dt", dt, "s")
     output_dt = dt if output_dt is None else check_positive("output_dt", output_dt, "s")
     if output_dt < dt * (1 - 1e-9):
-        output_dt = dt
+        raise ModelError(f"output_dt must be >= dt = {dt:g} s (outputs are taken at steps), "
+                         f"got {output_dt:g} s")
     n_intervals = max(1, int(round(t_end / output_dt)))
     output_dt = t_end / n_intervals
     substeps = max(1, int(math.ceil(output_dt / dt * (1 - 1e-9))))
@@ -134,7 +171,7 @@ def _progress(total: int, enabled: bool | None, desc: str):
 def simulate(system: System, state: State, *, t_end: float, dt: float | None = None,
              solver: Any = DEFAULT_SOLVER, output_dt: float | None = None,
              drift_tolerance: float = 1e-6, locate_crossings: bool = False,
-             on_failure: str = "raise", progress: bool | None = None,
+             max_halvings: int = 6, on_failure: str = "raise", progress: bool | None = None,
              chunks: int | None = None, solver_options: dict | None = None) -> Results:
     """Simulate ``system`` from ``state`` until ``t_end``.
 
@@ -146,11 +183,14 @@ def simulate(system: System, state: State, *, t_end: float, dt: float | None = N
         output_dt: output interval [s] (default: every step).
         drift_tolerance: stop when max|Φ| exceeds this [m].
         locate_crossings: split fixed steps at node crossings of sliding joints.
+        max_halvings: a failed fixed step (Newton not converged, NaN) is redone in
+            substeps down to dt / 2^max_halvings before the run is declared failed.
         on_failure: ``"raise"`` (a :class:`SimulationError` carrying the results up to
             the failure) or ``"return"`` (results with ``status`` set).
         progress: show a progress bar (None: only when the run takes over a second).
-        chunks: number of compiled chunks the run is split into (progress and early
-            stop granularity; default up to 50).
+        chunks: number of chunks the run is split into (progress and early-stop
+            granularity; default: chunks of about 500 steps, one compiled program for
+            runs of any length).
         solver_options: options for a solver given by name.
 
     Raises:
@@ -159,18 +199,9 @@ def simulate(system: System, state: State, *, t_end: float, dt: float | None = N
             sliding joint leaving its beam); ``err.results`` holds the results so far.
     """
     dt = 1e-3 if dt is None else dt
-    if on_failure not in ("raise", "return"):
-        raise ModelError(f"on_failure must be 'raise' or 'return', got {on_failure!r}")
-    check_positive("drift_tolerance", drift_tolerance, "m")
-    n_int, sub, h, out_dt = time_grid(t_end, dt, output_dt)
-    if isinstance(solver, str):
-        solver = make_solver(solver, **(solver_options or {}))
-    elif solver_options:
-        raise ModelError("solver_options apply to solvers given by name")
-    options = RunOptions(drift_tolerance=drift_tolerance, locate_crossings=locate_crossings)
-    n_chunks = min(n_int, 50) if chunks is None else max(1, min(int(chunks), n_int))
-    per_chunk = int(math.ceil(n_int / n_chunks))
-    n_chunks = int(math.ceil(n_int / per_chunk))
+    solver, options, (n_int, sub, h, out_dt), (per_chunk, n_chunks) = _prepare(
+        t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings, on_failure,
+        chunks, solver_options)
     t0 = float(state.t)
     if isinstance(solver, DiffraxSolver):
         return _simulate_diffrax(system, state, solver, t0, n_int, out_dt, dt, per_chunk, n_chunks,
@@ -179,75 +210,178 @@ def simulate(system: System, state: State, *, t_end: float, dt: float | None = N
                            on_failure, progress)
 
 
-@eqx.filter_jit
 def _init_fixed(system, state, solver):
     context = solver.prepare(system)
     return initial_loop(system, solver, state, context), context
 
 
-@eqx.filter_jit
 def _chunk_fixed(system, loop, context, solver, h, t_stop, n_intervals, substeps, options):
-    # steps beyond t_stop (padding of the last chunk) are no-ops
-    def run(loop):
-        return integrate_fixed(system, solver, loop, context, h, n_intervals=n_intervals,
-                               substeps=substeps, options=options)
-    del t_stop
-    return run(loop)
+    return integrate_fixed(system, solver, loop, context, h, n_intervals=n_intervals,
+                           substeps=substeps, options=options, t_stop=t_stop)
 
 
-def _assemble(system, segs, solver_name_, h, status, t_fail, n_valid, wall, compile_s, message,
-              info) -> Results:
-    cat = {k: np.concatenate([np.asarray(getattr(s, k)) for s in segs])[:n_valid]
+_init_single = eqx.filter_jit(_init_fixed)
+_chunk_single = eqx.filter_jit(_chunk_fixed)
+_init_batch = eqx.filter_jit(eqx.filter_vmap(_init_fixed, in_axes=(eqx.if_array(0), eqx.if_array(0), None)))
+_chunk_batch = eqx.filter_jit(eqx.filter_vmap(
+    _chunk_fixed, in_axes=(eqx.if_array(0), eqx.if_array(0), eqx.if_array(0), None, None, None, None,
+                           None, None)))
+
+
+_COMPILED: dict = {}
+
+
+def _signature(args):
+    """Hashable description of arguments: tree structure (with static fields), shapes
+    and dtypes of arrays, values of everything else."""
+    leaves, treedef = jax.tree.flatten(args)
+    sig = tuple((tuple(np.shape(x)), str(np.asarray(x).dtype)) if eqx.is_array(x) else ("static", x)
+                for x in leaves)
+    return treedef, sig
+
+
+def compiled(fn, *args):
+    """AOT-compiled ``fn`` for these arguments, cached in-process by their structure.
+
+    Returns (executable, seconds spent compiling now; 0.0 when cached)."""
+    key = (fn, _signature(args))
+    hit = _COMPILED.get(key)
+    if hit is not None:
+        return hit, 0.0
+    t0 = time.perf_counter()
+    exe = fn.lower(*args).compile()
+    _COMPILED[key] = exe
+    return exe, time.perf_counter() - t0
+
+
+def _rows_until_failure(t_rows: np.ndarray, n_rows: int) -> int:
+    """After a failure the state is frozen: rows stop advancing in time."""
+    stalled = np.nonzero(np.diff(t_rows) <= 0.0)[0]
+    return min(n_rows, int(stalled[0]) + 1 if stalled.size else len(t_rows))
+
+
+def _run_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, options, progress,
+               batch: int | None):
+    """Compile and run the chunked fixed-step loop; ``batch`` members share one vmapped
+    program. Returns (segments, final loop, compile time, wall time, chunks run)."""
+    init_fn, chunk_fn = (_init_single, _chunk_single) if batch is None else (_init_batch, _chunk_batch)
+    t_end = t0 + n_int * sub * h
+    h = jnp.asarray(h)  # traced: runs with other steps reuse the compiled program
+    init_c, c1 = compiled(init_fn, system, state, solver)
+    loop, ctx = init_c(system, state, solver)
+    t_stop = jnp.asarray(t_end)
+    chunk_c, c2 = compiled(chunk_fn, system, loop, ctx, solver, h, t_stop, per_chunk, sub, options)
+    compile_s = c1 + c2
+    tw = time.perf_counter()
+    loop, ctx = init_c(system, state, solver)
+    first = segment_of(loop) if batch is None else eqx.filter_vmap(segment_of)(loop)
+    segs = [first]
+    bar = _progress(t_end - t0, progress, solver_name(solver) + ("" if batch is None else f" ×{batch}"))
+    ran = 0
+    for c in range(n_chunks):
+        loop, seg = chunk_c(system, loop, ctx, solver, h, t_stop, per_chunk, sub, options)
+        jax.block_until_ready(seg.q)
+        segs.append(seg)
+        ran += 1
+        bar.update(min(per_chunk, n_int - c * per_chunk) * (t_end - t0) / n_int)
+        if np.all(np.asarray(loop.status) != OK):
+            break
+    bar.close()
+    return segs, loop, compile_s, time.perf_counter() - tw, ran
+
+
+def _results_fixed(system, segs, loop, solver, n_int, sub, h, t0, compile_s, wall, options,
+                   index=None) -> Results:
+    """Results of one (batch member of a) fixed-step run."""
+    take = (lambda a: np.asarray(a)) if index is None else (lambda a: np.asarray(a)[index])
+    axis = 0 if index is None else 1
+    cat = {k: np.concatenate([np.asarray(getattr(s, k)) if index is None else
+                              np.asarray(getattr(s, k))[index] for s in segs], axis=0)
            for k in ("t", "q", "v", "acc", "lam", "work", "iterations")}
-    return Results(system=system, solver=solver_name_, dt=float(h), wall_time_s=wall,
-                   compile_time_s=compile_s, status=REASONS.get(status, "solver") if status else "ok",
-                   failure_time=t_fail, message=message, info=info, **cat)
+    del axis
+    status = int(take(loop.status))
+    t_fail = float(take(loop.fail_time)) if status != OK else None
+    n_rows = 1 + n_int
+    if status != OK:
+        n_rows = _rows_until_failure(cat["t"], n_rows)
+    cat = {k: v[:n_rows] for k, v in cat.items()}
+    cat["t"] = t0 + h * sub * np.arange(n_rows)  # exact grid (the carry accumulates h)
+    message = "" if status == OK else _failure_message(status, t_fail, system, options)
+    return Results(system=system, solver=solver_name(solver), dt=float(h), wall_time_s=wall,
+                   compile_time_s=compile_s, status=REASONS[status], failure_time=t_fail,
+                   message=message, info=dict(steps=int((n_rows - 1) * sub), substeps_per_output=sub),
+                   **cat)
 
 
 def _simulate_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, options,
                     on_failure, progress):
-    name = solver_name(solver)
-    tc = time.perf_counter()
-    init_c = _init_fixed.lower(system, state, solver).compile()
-    chunk_c = None
-    if n_chunks:
-        loop0, ctx0 = init_c(system, state, solver)
-        chunk_c = _chunk_fixed.lower(system, loop0, ctx0, solver, h, 0.0, per_chunk, sub,
-                                     options).compile()
-    compile_s = time.perf_counter() - tc
-
-    tw = time.perf_counter()
-    loop, ctx = init_c(system, state, solver)
-    segs = [segment_of(loop)]
-    t_end = t0 + n_int * sub * h
-    status, t_fail = OK, None
-    bar = _progress(n_int * sub * h, progress, f"{name}")
-    done_intervals = 0
-    for _ in range(n_chunks):
-        loop, seg = chunk_c(system, loop, ctx, solver, h, t_end, per_chunk, sub, options)
-        jax.block_until_ready(seg.q)
-        segs.append(seg)
-        done_intervals += per_chunk
-        bar.update(min(per_chunk, n_int - done_intervals + per_chunk) * sub * h)
-        status = int(loop.status)
-        if status != OK:
-            t_fail = float(loop.fail_time)
-            break
-    bar.close()
-    wall = time.perf_counter() - tw
-    # rows: the initial state plus n_int intervals; after a failure, rows up to the last good step
-    n_rows = 1 + n_int
-    if status != OK:
-        # after a failure the state is frozen: rows stop advancing in time
-        t_all = np.concatenate([np.asarray(s.t) for s in segs])
-        stalled = np.nonzero(np.diff(t_all) <= 0.0)[0]
-        n_rows = min(n_rows, int(stalled[0]) + 1 if stalled.size else len(t_all))
-    message = "" if status == OK else _failure_message(status, t_fail, system, options)
-    res = _assemble(system, segs, name, h, status, t_fail, n_rows, wall, compile_s, message,
-                    dict(steps=int(min(done_intervals, n_int) * sub), substeps_per_output=sub))
-    if status != OK and on_failure == "raise":
-        raise SimulationError(message, time=t_fail, reason=REASONS[status], results=res)
+    segs, loop, compile_s, wall, _ = _run_fixed(system, state, solver, t0, n_int, sub, h, per_chunk,
+                                                n_chunks, options, progress, None)
+    res = _results_fixed(system, segs, loop, solver, n_int, sub, h, t0, compile_s, wall, options)
+    if res.status != "ok" and on_failure == "raise":
+        raise SimulationError(res.message, time=res.failure_time, reason=res.status, results=res)
     return res
+
+
+def stack(trees):
+    """Stack pytrees of identical structure (systems, states) along a new leading axis."""
+    return jax.tree.map(lambda *xs: jnp.stack(xs), *trees)
+
+
+def unstack(tree, index):
+    """Member ``index`` of a stacked pytree."""
+    return jax.tree.map(lambda x: x[index], tree)
+
+
+def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
+                   solver: Any = DEFAULT_SOLVER, output_dt: float | None = None,
+                   drift_tolerance: float = 1e-6, locate_crossings: bool = False,
+                   max_halvings: int = 6, on_failure: str = "raise", progress: bool | None = None,
+                   chunks: int | None = None, solver_options: dict | None = None) -> list[Results]:
+    """Simulate several systems of identical structure in ONE jitted, vmapped program.
+
+    Systems differ only in array data: parameter values (α, masses, s₀, …) or meshes of
+    different element counts padded to a common size (``Model.build(pad_to=...)``).
+    Compilation is shared (reported in every result); the wall time of the batch is
+    reported per result as the batch total divided by the batch size, and in
+    ``info["batch_wall_time_s"]``. Arguments as for :func:`simulate` (fixed-step solvers).
+
+    Raises:
+        SimulationError: a member failed and ``on_failure="raise"``; ``err.results`` is
+            the list of all members' results.
+    """
+    systems, states = list(systems), list(states)
+    if not systems or len(systems) != len(states):
+        raise ModelError("simulate_batch needs equally many systems and states (at least one)")
+    treedefs = {jax.tree.structure(s) for s in systems}
+    if len(treedefs) != 1 or len({tuple(np.shape(x) for x in jax.tree.leaves(s)) for s in systems}) != 1:
+        raise ModelError("simulate_batch needs systems of identical structure and shapes: build them "
+                         "from the same model with the same pad_to")
+    dt = 1e-3 if dt is None else dt
+    solver, options, (n_int, sub, h, _), (per_chunk, n_chunks) = _prepare(
+        t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings, on_failure,
+        chunks, solver_options)
+    if isinstance(solver, DiffraxSolver):
+        raise ModelError("simulate_batch runs fixed-step solvers (generalized-alpha, rk4)")
+    t0s = {float(s.t) for s in states}
+    if len(t0s) != 1:
+        raise ModelError("simulate_batch needs a common start time")
+    t0 = t0s.pop()
+    bs, bst = stack(systems), stack(states)
+    segs, loop, compile_s, wall, _ = _run_fixed(bs, bst, solver, t0, n_int, sub, h, per_chunk,
+                                                n_chunks, options, progress, len(systems))
+    out = []
+    for i, sys_i in enumerate(systems):
+        r = _results_fixed(sys_i, segs, loop, solver, n_int, sub, h, t0, compile_s,
+                           wall / len(systems), options, index=i)
+        r.info["batch_wall_time_s"] = wall
+        r.info["batch_size"] = len(systems)
+        out.append(r)
+    if on_failure == "raise" and any(r.status != "ok" for r in out):
+        bad = [f"member {i}: {r.message}" for i, r in enumerate(out) if r.status != "ok"]
+        first = next(r for r in out if r.status != "ok")
+        raise SimulationError("; ".join(bad), time=first.failure_time, reason=first.status, results=out)
+    return out
 
 
 @eqx.filter_jit
@@ -268,8 +402,8 @@ def _simulate_diffrax(system, state, solver, t0, n_int, out_dt, dt, per_chunk, n
     pad = per_chunk * n_chunks - n_int
     ts_all = np.concatenate([ts_all, ts_all[-1] + out_dt * np.arange(1, pad + 1)])
     tc = time.perf_counter()
-    chunk_c = _diffrax_chunk.lower(system, solver, context, y0, jnp.asarray(t0),
-                                   jnp.asarray(ts_all[:per_chunk]), jnp.asarray(dt)).compile()
+    chunk_c, _ = compiled(_diffrax_chunk, system, solver, context, y0, jnp.asarray(t0),
+                          jnp.asarray(ts_all[:per_chunk]), jnp.asarray(dt))
     status_fn = jax.jit(lambda sys, q, v, lam, t: jax.vmap(
         lambda qq, vv, ll, tt: step_status(sys, None, Carry(tt, qq, vv, qq, qq, ll, jnp.zeros(3), jnp.zeros(3)),
                                            jnp.array(True), options))(q, v, lam, t))

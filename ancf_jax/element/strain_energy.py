@@ -31,8 +31,25 @@ the degree-8 Green–Lagrange integrand) makes the cubic element lock in bending
 axial strain field of a bent cubic element carries a spurious quadratic part that full
 integration penalises with the large EA. Three Lobatto points keep the constant, linear
 and quadratic axial strain modes (no zero-energy mode, unlike 2-point Gauss) while
-relaxing that coupling; the convergence studies in the tests and in
-``benchmarks/m1_convergence.py`` show the effect. Both rules are options.
+relaxing that coupling. Both rules are options.
+
+Measured on M1's static equilibrium (tip displacement error against the extensible
+Kirchhoff rod solved by shooting, for 3 / 6 / 12 / 24 elements; script in
+``tests/models/test_m1.py``):
+
+=================================  =========  =========  =========  =========
+axial / bending rule (GL, exact)    3          6          12         24
+=================================  =========  =========  =========  =========
+Lobatto 3 / Gauss 3 (default)       4.8e-4 m   3.5e-5 m   1.8e-6 m   3.4e-7 m
+Gauss 5 / Gauss 3 (full)            8.5e-3 m   1.2e-3 m   2.0e-4 m   8.9e-6 m
+Gauss 3 / Gauss 3                   7.9e-3 m   1.2e-3 m   1.8e-4 m   6.4e-6 m
+Gauss 2 / Gauss 2                   3.4e-4 m   2.8e-5 m   1.4e-6 m   3.8e-7 m
+=================================  =========  =========  =========  =========
+
+Full integration locks (errors 30× larger at 6 elements). With engineering strain
+and material curvature the element converges at a clean fourth order to the
+Kirchhoff rod (1.3e-4, 8.7e-6, 5.4e-7, 3.4e-8 m); the paper's measures converge to a
+limit about 3e-7 m away (their continuum model differs at O(ε)).
 """
 
 from __future__ import annotations

@@ -39,7 +39,7 @@ import jax.numpy as jnp
 
 from .. import dae
 from ..linalg import factor_saddle, solve_saddle
-from .base import AbstractIntegrator, Carry, StepInfo
+from .base import AbstractIntegrator, Carry, StepInfo, run_if
 
 
 class GeneralizedAlpha(AbstractIntegrator):
@@ -142,7 +142,7 @@ class GeneralizedAlpha(AbstractIntegrator):
 
             def body(c):
                 x, fac, it, _, err_prev, refresh = c
-                fac = jax.lax.cond(refresh, lambda: factor_at(x), lambda: fac)
+                fac = run_if(refresh, lambda _: factor_at(x), fac)
                 dx, dq = correction(fac, f(x))
                 x = x + dx
                 err = jnp.max(jnp.abs(dq))

@@ -10,6 +10,7 @@ from __future__ import annotations
 from .. import mesh
 from ..element.strain_energy import Formulation
 from ..model import Model, node
+from ..outputs import Output
 from ..section import Section
 
 #: parameters of M1 (SI), as in MODELS.md
@@ -19,6 +20,17 @@ M1 = dict(length=0.402, n_elements=6, diameter=1e-3, area=7.854e-7, second_momen
 
 #: where the paper evaluates the stress: midpoint of element E1, fibre y = +0.5 mm
 STRESS_ELEMENT, STRESS_XI, STRESS_FIBRE = 0, 0.5, 0.5e-3
+
+#: the CSV columns of ``ancf-jax run m1``: tip of the last node, E1-midpoint stress
+OUTPUTS = (
+    Output("tip_x", "node", "beam", "x", node=-1),
+    Output("tip_y", "node", "beam", "y", node=-1),
+    Output("sigma_e1_mid", "stress", "beam", element=STRESS_ELEMENT, xi=STRESS_XI,
+           fibre=STRESS_FIBRE, measure="exact"),
+)
+
+#: default run settings (MODELS.md: t in [0, 2] s; outputs every 1 ms)
+RUN = dict(t_end=2.0, dt=1e-3, output_dt=1e-3, solver="generalized-alpha", solver_options={})
 
 
 def m1_model(n_elements: int | None = None, *, formulation: Formulation | None = None,

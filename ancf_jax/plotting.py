@@ -1,0 +1,169 @@
+"""Figures of runs: time histories, stress maps, deformed shapes, trajectories,
+animations. Matplotlib with the non-interactive Agg backend; every function returns
+the figure and optionally saves it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Sequence
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from .results import Results  # noqa: E402
+
+
+def _finish(fig, path):
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(path, dpi=130)
+        plt.close(fig)
+    return fig
+
+
+def time_history(t, series: dict, *, ylabel: str, title: str = "", path=None, styles=None):
+    """Curves over time: ``series`` maps label → values (same length as t)."""
+    fig, ax = plt.subplots(figsize=(7, 3.6))
+    for i, (label, y) in enumerate(series.items()):
+        kw = (styles or {}).get(label, {})
+        ax.plot(t, y, label=label, lw=1.2, **kw)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel(ylabel)
+    if title:
+        ax.set_title(title)
+    ax.grid(alpha=0.3)
+    if len(series) > 1:
+        ax.legend()
+    return _finish(fig, path)
+
+
+def beam_curve(results: Results, beam: str, row: int, points_per_element: int = 12):
+    """Centre line of a beam at output row ``row``: (x, y) arrays of sampled points."""
+    b = results.system.beam_names.index(beam)
+    bm = results.system.beams[b]
+    n = int(bm.mesh.n_elements)
+    s_nodes = np.asarray(bm.mesh.node_arc_lengths)[: n + 1]
+    s = np.concatenate([np.linspace(s_nodes[k], s_nodes[k + 1], points_per_element, endpoint=k == n - 1)
+                        for k in range(n)])
+    import jax
+    import jax.numpy as jnp
+    nodes = jnp.asarray(results.nodes(beam)[row])
+    xy = np.asarray(jax.vmap(lambda ss: bm.position(nodes, ss))(jnp.asarray(s)))
+    return xy[:, 0], xy[:, 1]
+
+
+def deformed_shapes(results: Results, beam: str, times: Sequence[float], *, bodies: Sequence[str] = (),
+                    title: str = "", path=None, equal: bool = True):
+    """Beam centre line (and body centres) at chosen times (paper Figs. 5 and 12)."""
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    cmap = plt.get_cmap("viridis")
+    for i, tt in enumerate(times):
+        row = int(np.argmin(np.abs(results.t - tt)))
+        x, y = beam_curve(results, beam, row)
+        c = cmap(i / max(len(times) - 1, 1))
+        ax.plot(x, y, color=c, lw=1.5, label=f"t = {results.t[row]:.2f} s")
+        for bname in bodies:
+            p = results.body(bname)[row]
+            ax.plot(p[0], p[1], "s", color=c, ms=6)
+    ax.set_xlabel("X [m]")
+    ax.set_ylabel("Y [m]")
+    if equal:
+        ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    if title:
+        ax.set_title(title)
+    return _finish(fig, path)
+
+
+def stress_map(t, s, sigma, *, title: str = "", path=None, unit: float = 1e6, label="MPa"):
+    """Stress along a beam over time as a colour map (paper Fig. 8).
+
+    Args:
+        t: times (N,); s: arc lengths (E, P); sigma: stresses (N, E, P) [Pa].
+    """
+    ss = np.asarray(s).ravel()
+    keep = np.isfinite(ss)
+    order = np.argsort(ss[keep], kind="stable")
+    sv = ss[keep][order]
+    sig = np.asarray(sigma).reshape(len(t), -1)[:, keep][:, order] / unit
+    fig, ax = plt.subplots(figsize=(7, 3.8))
+    vmax = np.nanmax(np.abs(sig)) or 1.0
+    mesh = ax.pcolormesh(t, sv, sig.T, cmap="RdBu_r", vmin=-vmax, vmax=vmax, shading="nearest")
+    fig.colorbar(mesh, ax=ax, label=f"bending stress [{label}]")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("arc length s [m]")
+    if title:
+        ax.set_title(title)
+    return _finish(fig, path)
+
+
+def trajectories(curves: dict, *, title: str = "", path=None, xlabel="X [m]", ylabel="Y [m]"):
+    """Planar trajectories: ``curves`` maps label → (x, y) (paper Fig. 13)."""
+    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    for label, (x, y) in curves.items():
+        ax.plot(x, y, lw=1.3, label=label)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    if title:
+        ax.set_title(title)
+    return _finish(fig, path)
+
+
+def animate(results: Results, beam: str, path, *, bodies: Sequence[str] = (), links=(), fps: int = 25,
+            stride: int | None = None, title: str = ""):
+    """Animation of a beam and bodies (GIF with Pillow; MP4 if ffmpeg is available and the
+    path ends in .mp4). ``links`` are pairs of body names drawn as lines."""
+    from matplotlib import animation
+    n = len(results.t)
+    if stride is None:
+        dt = float(results.t[1] - results.t[0]) if n > 1 else 1.0
+        stride = max(1, int(round(1.0 / (fps * dt))))
+    rows = list(range(0, n, stride))
+    xs, ys = [], []
+    for r in rows:
+        x, y = beam_curve(results, beam, r, 8)
+        xs.append(x)
+        ys.append(y)
+    allx = np.concatenate(xs + [results.body(b)[:, 0] for b in bodies])
+    ally = np.concatenate(ys + [results.body(b)[:, 1] for b in bodies])
+    fig, ax = plt.subplots(figsize=(6, 4.5))
+    pad = 0.05 * max(np.ptp(allx), np.ptp(ally), 1e-3)
+    ax.set_xlim(allx.min() - pad, allx.max() + pad)
+    ax.set_ylim(ally.min() - pad, ally.max() + pad)
+    ax.set_aspect("equal")
+    ax.grid(alpha=0.3)
+    (line,) = ax.plot([], [], "b-", lw=2)
+    marks = [ax.plot([], [], "s", ms=9)[0] for _ in bodies]
+    link_lines = [ax.plot([], [], "k-", lw=1)[0] for _ in links]
+    label = ax.text(0.02, 0.95, "", transform=ax.transAxes)
+    if title:
+        ax.set_title(title)
+
+    def update(i):
+        r = rows[i]
+        line.set_data(xs[i], ys[i])
+        for m, b in zip(marks, bodies):
+            p = results.body(b)[r]
+            m.set_data([p[0]], [p[1]])
+        for ln, (a, b) in zip(link_lines, links):
+            pa, pb = results.body(a)[r], results.body(b)[r]
+            ln.set_data([pa[0], pb[0]], [pa[1], pb[1]])
+        label.set_text(f"t = {results.t[r]:.2f} s")
+        return [line, *marks, *link_lines, label]
+
+    anim = animation.FuncAnimation(fig, update, frames=len(rows), blit=True)
+    path = Path(path)
+    if path.suffix == ".mp4" and animation.writers.is_available("ffmpeg"):
+        anim.save(path, writer=animation.FFMpegWriter(fps=fps))
+    else:
+        path = path.with_suffix(".gif")
+        anim.save(path, writer=animation.PillowWriter(fps=fps))
+    plt.close(fig)
+    return path

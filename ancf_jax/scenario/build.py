@@ -1,0 +1,223 @@
+"""From a checked scenario to the builder: :func:`make_model` and :func:`make_outputs`.
+
+Every name has been resolved by :mod:`~.checks`; here the tables become
+:class:`~ancf_jax.model.Model` calls in file order (beams, bodies, joints, loads), so
+the assembled system lists its constraints in the order of the file.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import jax.numpy as jnp
+import numpy as np
+
+from .. import mesh as _mesh
+from ..beam import Beam
+from ..element.strain_energy import Formulation
+from ..errors import ModelError
+from ..model import Model, beam_point, body_point, ground, node
+from ..outputs import Output
+from ..section import Section
+from . import schema as S
+from .errors import ScenarioError
+from .geometry import first_node, make_mesh
+
+
+@dataclasses.dataclass(frozen=True)
+class PointPath:
+    """t ↦ (x(t), y(t)) [m] of a prescribed point (hashable: equal specs, equal systems)."""
+
+    x: object
+    y: object
+
+    def __call__(self, t):
+        return jnp.stack([jnp.asarray(self.x(t), float), jnp.asarray(self.y(t), float)])
+
+
+def local_of(spec: S.ScenarioSpec, ref: S.PointRef) -> tuple[float, float]:
+    """Body-frame coordinates [m] of a body point reference."""
+    if ref.point is not None:
+        return spec.bodies[ref.body].points[ref.point]
+    return ref.local if ref.local is not None else (0.0, 0.0)
+
+
+def point_ref(spec: S.ScenarioSpec, lengths: dict[str, float], ref: S.PointRef):
+    """The builder's point reference for a scenario point (arc lengths limited to the
+    mesh length ``lengths[beam]``, see :func:`on_beam`)."""
+    if ref.ground is not None:
+        return ground(*ref.ground)
+    if ref.body is not None:
+        return body_point(ref.body, local_of(spec, ref))
+    if ref.node is not None:
+        return node(ref.beam, ref.node)
+    return beam_point(ref.beam, on_beam(ref.s, lengths[ref.beam]))
+
+
+def on_beam(s: float, length: float) -> float:
+    """``s`` limited to the mesh length: the checks accept s up to L (1 + 1e-12), and
+    the sum of a straight beam's element lengths L/n may fall an ulp short of L."""
+    return min(float(s), length)
+
+
+def section_of(beam: S.BeamSpec, length: float) -> Section:
+    """The beam's :class:`Section`; ρA from mass_per_length, density·A or mass/L."""
+    sec = beam.section
+    d = sec.diameter
+    area = sec.A if sec.A is not None else math.pi * d * d / 4.0
+    inertia = sec.I if sec.I is not None else math.pi * d**4 / 64.0
+    if sec.mass_per_length is not None:
+        mpl = sec.mass_per_length
+    elif sec.density is not None:
+        mpl = sec.density * area
+    else:
+        mpl = sec.mass / length
+    fibre = sec.fibre if sec.fibre is not None else (d / 2.0 if d is not None else None)
+    return Section(sec.E, area, inertia, mpl, fibre_distance=fibre)
+
+
+def nominal_length(beam: S.BeamSpec, mesh: _mesh.BeamMesh) -> float:
+    """L [m]: the given length of a straight beam, else the sum of element lengths."""
+    if isinstance(beam.geometry, S.Straight):
+        return float(beam.geometry.length)
+    return float(np.sum(np.asarray(mesh.element_lengths)))
+
+
+def initial_nodes(beam: S.BeamSpec, mesh: _mesh.BeamMesh, length: float):
+    """(initial nodal coordinates or None, initial nodal velocities or None)."""
+    ini = beam.initial
+    n = int(mesh.n_elements)
+    nodes = None
+    if ini.shape == "catenary":
+        start = ini.start if ini.start is not None else first_node(beam)
+        nodes = _mesh.catenary_nodes(start, ini.end, length, n)
+    elif ini.shape == "nodes":
+        nodes = np.asarray(ini.nodes, float)
+    vel = None
+    if ini.velocities is not None:
+        vel = np.asarray(ini.velocities, float)
+    elif ini.velocity != (0.0, 0.0):
+        vel = np.zeros((n + 1, 4))
+        vel[:, :2] = ini.velocity
+    return nodes, vel
+
+
+def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
+    """The :class:`Model` of a checked scenario (host work plus small eager JAX ops
+    to place bodies on beams; nothing is compiled for the system)."""
+    m = Model(gravity=spec.gravity)
+    shapes: dict[str, tuple[Beam, np.ndarray]] = {}
+    lengths: dict[str, float] = {}  # as the builder measures them
+    for name, b in spec.beams.items():
+        with _located(file, ("beams", name)):
+            mesh = make_mesh(b)
+            lengths[name] = float(np.asarray(mesh.element_lengths)[: int(mesh.n_elements)].sum())
+            length = nominal_length(b, mesh)
+            section = section_of(b, length)
+            f = b.formulation
+            formulation = Formulation(axial_strain=f.axial_strain, curvature=f.curvature,
+                                      axial_quadrature=tuple(f.axial_quadrature),
+                                      bending_quadrature=tuple(f.bending_quadrature))
+            nodes, vel = initial_nodes(b, mesh, length)
+            m.add_beam(name, mesh, section, alpha=b.alpha, beta=b.beta, formulation=formulation,
+                       initial_nodes=nodes, initial_velocities=vel)
+            shapes[name] = (Beam(mesh, section), np.asarray(mesh.reference_nodes) if nodes is None else nodes)
+
+    poses: dict[str, tuple[float, float, float]] = {}
+    for name, b in spec.bodies.items():
+        with _located(file, ("bodies", name)):
+            if b.at is not None:
+                position = _initial_position(spec, b.at, shapes, poses, lengths)
+            else:
+                position = b.position if b.position is not None else (0.0, 0.0)
+            poses[name] = (position[0], position[1], b.angle)
+            m.add_body(name, mass=b.mass, inertia=b.inertia, position=position, angle=b.angle,
+                       velocity=b.velocity, angular_velocity=b.angular_velocity)
+
+    for name, j in spec.joints.items():
+        with _located(file, ("joints", name)):
+            if j.type == "clamp":
+                m.clamp(name, j.beam, j.node, mode=j.mode)
+            elif j.type == "pin":
+                m.pin(name, point_ref(spec, lengths, j.point), j.location)
+            elif j.type == "revolute":
+                m.revolute(name, point_ref(spec, lengths, j.a), point_ref(spec, lengths, j.b))
+            elif j.type == "fixed":
+                m.fixed(name, point_ref(spec, lengths, j.point), j.body, j.local)
+            elif j.type == "sliding":
+                m.slider(name, j.body, j.beam, on_beam(j.s, lengths[j.beam]), local=j.local, hold=j.hold,
+                         rate=j.rate)
+            elif j.type == "prescribed_point":
+                m.prescribe_point(name, point_ref(spec, lengths, j.point), PointPath(j.x, j.y))
+            else:
+                m.prescribe_body(name, j.body, j.coordinate, j.value)
+
+    for name, f in spec.loads.items():
+        with _located(file, ("loads", name)):
+            if f.type == "point_force":
+                m.point_force(name, point_ref(spec, lengths, f.point), f.force, f.time_function)
+            elif f.type == "torque":
+                m.torque(name, f.body, f.torque, f.time_function)
+            else:
+                m.spring_damper(name, point_ref(spec, lengths, f.a), point_ref(spec, lengths, f.b),
+                                stiffness=f.stiffness, damping=f.damping, rest_length=f.rest_length)
+    return m
+
+
+def _initial_position(spec, ref: S.PointRef, shapes, poses, lengths) -> tuple[float, float]:
+    """Where a point is in the initial configuration (beams: their initial shape,
+    evaluated with the element's cubic at the arc length; bodies: declared earlier)."""
+    if ref.ground is not None:
+        return ref.ground
+    if ref.body is not None:
+        x, y, th = poses[ref.body]
+        lx, ly = local_of(spec, ref)
+        c, s = math.cos(th), math.sin(th)
+        return (x + (c * lx - s * ly), y + (s * lx + c * ly))
+    beam, nodes = shapes[ref.beam]
+    if ref.node is not None:
+        return tuple(float(v) for v in nodes[ref.node, :2])
+    return tuple(float(v) for v in beam.position(jnp.asarray(nodes), on_beam(ref.s, lengths[ref.beam])))
+
+
+class _located:
+    """Turn a builder error into a one-line ScenarioError at the entity's key path."""
+
+    def __init__(self, file, path):
+        self.file, self.path = file, path
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, kind, err, tb):
+        if err is not None and isinstance(err, ModelError) and not isinstance(err, ScenarioError):
+            raise ScenarioError(self.file, self.path, str(err), "see docs/scenario-format.md") from err
+        return False
+
+
+def make_outputs(spec: S.ScenarioSpec) -> list[Output]:
+    """The named output columns as :class:`~ancf_jax.outputs.Output` specs, in file order."""
+    out = []
+    for name, o in spec.outputs.columns.items():
+        if o.type == "node":
+            out.append(Output(name, "node", o.beam, o.component, node=o.node))
+        elif o.type == "point":
+            out.append(Output(name, "point", o.beam, o.component, s=o.s))
+        elif o.type == "body":
+            local = None
+            if o.point is not None or o.local is not None:
+                local = local_of(spec, S.PointRef(body=o.body, point=o.point, local=o.local))
+            out.append(Output(name, "body", o.body, o.component, local=local))
+        elif o.type in ("sliding", "sliding_point"):
+            out.append(Output(name, o.type, o.joint, o.component))
+        elif o.type == "stress":
+            out.append(Output(name, "stress", o.beam, "sigma", s=o.s, element=o.element,
+                              xi=o.xi if o.element is not None else None, fibre=o.fibre,
+                              measure=o.measure))
+        elif o.type == "reaction":
+            out.append(Output(name, "reaction", o.joint,
+                              o.component if o.component is not None else str(o.index)))
+        else:
+            out.append(Output(name, "energy", "", o.component))
+    return out

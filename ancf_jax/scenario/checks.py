@@ -1,0 +1,315 @@
+"""Checks of a scenario that involve several keys or the names of other entities.
+
+Run on the validated schema (:class:`~.schema.ScenarioSpec`) with host data only:
+names and their uniqueness, references to beams, bodies, joints and body points,
+node indices, arc lengths inside beams, keys that exclude or require each other.
+The first problem raises :class:`~.errors.Invalid` with its key path.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from . import schema as S
+from .errors import Invalid
+from .geometry import element_count, first_node, reference_length
+
+NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]{0,63}$")
+NAME_RULE = "a name of letters, digits, '_' and '-', starting with a letter or '_', at most 64 characters"
+POINT_FORMS = ('{ ground = [x, y] }, { body = "name" } with optional local = [x, y] or point = "p", '
+               '{ beam = "name", node = i } or { beam = "name", s = arc length }')
+#: constraint equations of each joint type (clamp: by mode)
+JOINT_SIZE = {"pin": 2, "revolute": 2, "fixed": 3, "sliding": 2, "prescribed_point": 2,
+              "prescribed_body": 1}
+
+
+def _names(names) -> str:
+    names = list(names)
+    return ", ".join(f'"{n}"' for n in names) if names else "none defined"
+
+
+class Checker:
+    """Runs every check on one scenario (see module docstring)."""
+
+    def __init__(self, spec: S.ScenarioSpec):
+        self.spec = spec
+        self.lengths: dict[str, float] = {}
+        self.elements: dict[str, int] = {}
+
+    # ------------------------------------------------------------------ helpers
+    def beam(self, path, name):
+        if name not in self.spec.beams:
+            raise Invalid(path, f'beam "{name}" does not exist', f"the name of a beam: {_names(self.spec.beams)}")
+
+    def body(self, path, name, before: str | None = None):
+        known = list(self.spec.bodies)
+        if before is not None:
+            known = known[: known.index(before)]
+        if name not in known:
+            extra = " declared before this one" if before is not None else ""
+            if before is not None and name in self.spec.bodies:
+                raise Invalid(path, f'body "{name}" is declared after this body',
+                              f"the name of a body declared before: {_names(known)}")
+            raise Invalid(path, f'body "{name}" does not exist', f"the name of a body{extra}: {_names(known)}")
+
+    def joint(self, path, name, types=None):
+        joints = self.spec.joints
+        known = [n for n, j in joints.items() if types is None or j.type in types]
+        what = "a joint" if types is None else " or ".join(f"{t} joint" for t in types)
+        if name not in known:
+            exists = name in joints
+            raise Invalid(path, f'joint "{name}" ' + ("is not a " + what if exists else "does not exist"),
+                          f"the name of {what if types is None else 'a ' + what}: {_names(known)}")
+
+    def node_index(self, path, beam, index):
+        n = self.elements[beam]
+        if not -(n + 1) <= index <= n:
+            raise Invalid(path, f'node {index} is outside beam "{beam}" with {n} elements',
+                          f"an integer 0 .. {n}, or -1 .. {-(n + 1)} from the last node")
+
+    def arc_length(self, path, beam, s, what="arc length"):
+        length = self.lengths[beam]
+        if not 0.0 <= s <= length * (1 + 1e-12):
+            raise Invalid(path, f'{what} {s:g} m is outside beam "{beam}"', f"0 .. {length:g} [m]")
+
+    def point(self, path, ref: S.PointRef, *, before_body: str | None = None):
+        given = [k for k in ("ground", "body", "beam") if getattr(ref, k) is not None]
+        if len(given) != 1:
+            raise Invalid(path, "a point needs exactly one of ground, body, beam"
+                          + (f" (got {', '.join(given)})" if given else ""), POINT_FORMS)
+        kind = given[0]
+        allowed = {"ground": {"ground"}, "body": {"body", "local", "point"},
+                   "beam": {"beam", "node", "s"}}[kind]
+        for k in ("ground", "body", "local", "point", "beam", "node", "s"):
+            if getattr(ref, k) is not None and k not in allowed:
+                raise Invalid(path + (k,), f"key {k} does not go with {kind}", POINT_FORMS)
+        if kind == "body":
+            self.body(path + ("body",), ref.body, before_body)
+            if ref.local is not None and ref.point is not None:
+                raise Invalid(path + ("point",), "give local or point, not both", POINT_FORMS)
+            if ref.point is not None:
+                self.body_point(path + ("point",), ref.body, ref.point)
+        elif kind == "beam":
+            self.beam(path + ("beam",), ref.beam)
+            if (ref.node is None) == (ref.s is None):
+                raise Invalid(path, "a beam point needs exactly one of node, s", POINT_FORMS)
+            if ref.node is not None:
+                self.node_index(path + ("node",), ref.beam, ref.node)
+            else:
+                self.arc_length(path + ("s",), ref.beam, ref.s)
+
+    def body_point(self, path, body, name):
+        points = self.spec.bodies[body].points
+        if name not in points:
+            raise Invalid(path, f'body "{body}" has no point "{name}"',
+                          f'a name in bodies.{body}.points: {_names(points)}')
+
+    @staticmethod
+    def exclusive(path, obj, keys, *, required=False):
+        given = [k for k in keys if getattr(obj, k) is not None]
+        if len(given) > 1:
+            raise Invalid(path + (given[1],), f"{given[1]} cannot be given together with {given[0]}",
+                          "one of " + ", ".join(keys))
+        if required and not given:
+            raise Invalid(path, f"missing key: give one of {', '.join(keys)}", "one of " + ", ".join(keys))
+
+    # ------------------------------------------------------------------ sections
+    def names(self):
+        if self.spec.name is not None and not NAME.match(self.spec.name):
+            raise Invalid(("name",), f"invalid scenario name {self.spec.name!r}", NAME_RULE)
+        seen: dict[str, str] = {}
+        for group in ("beams", "bodies", "joints", "loads"):
+            for name in getattr(self.spec, group):
+                if not NAME.match(name):
+                    raise Invalid((group, name), f"invalid name {name!r}", NAME_RULE)
+                if name in seen:
+                    raise Invalid((group, name), f'duplicate name "{name}": already used in {seen[name]}',
+                                  "names unique across beams, bodies, joints and loads")
+                seen[name] = group
+        for body, spec in self.spec.bodies.items():
+            for p in spec.points:
+                if not NAME.match(p):
+                    raise Invalid(("bodies", body, "points", p), f"invalid name {p!r}", NAME_RULE)
+        for name in self.spec.outputs.columns:
+            if not NAME.match(name) or name == "t":
+                raise Invalid(("outputs", "columns", name), f"invalid output name {name!r}",
+                              NAME_RULE + ", not 't' (the time column)")
+
+    def beams(self):
+        for name, b in self.spec.beams.items():
+            path = ("beams", name)
+            g = b.geometry
+            if isinstance(g, S.ThroughPoints):
+                p, t = np.asarray(g.points), np.asarray(g.slopes)
+                if len(p) < 2:
+                    raise Invalid(path + ("geometry", "points"), f"{len(p)} point given", "at least 2 points")
+                if t.shape != p.shape:
+                    raise Invalid(path + ("geometry", "slopes"), f"{len(t)} slopes for {len(p)} points",
+                                  "one slope per point")
+                if np.any(np.linalg.norm(t, axis=1) == 0.0):
+                    raise Invalid(path + ("geometry", "slopes"), "a slope is the zero vector", "non-zero vectors")
+                if np.any(np.linalg.norm(np.diff(p, axis=0), axis=1) == 0.0):
+                    raise Invalid(path + ("geometry", "points"), "two consecutive points coincide",
+                                  "distinct consecutive points")
+                if b.elements is not None and b.elements != len(p) - 1:
+                    raise Invalid(path + ("elements",), f"{b.elements} elements for {len(p)} points",
+                                  f"{len(p) - 1} (one element per interval) or no key")
+            else:
+                if b.elements is None:
+                    raise Invalid(path + ("elements",), "missing required key", "an integer 1 .. 2000")
+                if isinstance(g, S.Straight) and g.direction == (0.0, 0.0):
+                    raise Invalid(path + ("geometry", "direction"), "the zero vector", "a non-zero [x, y]")
+                if isinstance(g, S.Arc) and g.end_angle == g.start_angle:
+                    raise Invalid(path + ("geometry", "end_angle"), "equal to start_angle",
+                                  "an angle different from start_angle [rad]")
+            self.elements[name] = element_count(b)
+            self.lengths[name] = reference_length(g, self.elements[name])
+            self.section(path + ("section",), b.section)
+            if b.formulation.curvature == "small_strain" and not isinstance(g, S.Straight):
+                raise Invalid(path + ("formulation", "curvature"),
+                              "small_strain (Eq. 17) needs a straight reference geometry",
+                              '"exact" or "material" for a curved beam')
+            self.initial(path + ("initial",), name, b)
+
+    def section(self, path, sec: S.SectionSpec):
+        self.exclusive(path, sec, ("mass_per_length", "density", "mass"), required=True)
+        for k in ("A", "I"):
+            if getattr(sec, k) is None and sec.diameter is None:
+                raise Invalid(path + (k,), "missing required key (no diameter given)",
+                              "a number > 0 [m²]" if k == "A" else "a number > 0 [m⁴]")
+
+    def initial(self, path, name, b: S.BeamSpec):
+        ini, n = b.initial, self.elements[name]
+        if ini.shape == "catenary":
+            if ini.end is None:
+                raise Invalid(path + ("end",), "missing required key for shape = catenary", "[x, y] [m]")
+            start = ini.start if ini.start is not None else first_node(b)
+            dx, dy = ini.end[0] - start[0], ini.end[1] - start[1]
+            if dx <= 0.0:
+                raise Invalid(path + ("end",), "the catenary's end must lie to the right of its start",
+                              f"[x, y] with x > {start[0]:g} [m]")
+            if np.hypot(dx, dy) >= self.lengths[name] * (1 - 1e-12):
+                raise Invalid(path + ("end",), f"the chord {np.hypot(dx, dy):g} m is not shorter than "
+                              f"the beam ({self.lengths[name]:g} m)", "an end closer to the start than L")
+        for key in ("start", "end", "nodes"):
+            if key == "nodes" and ini.shape == "nodes":
+                continue
+            if key in ("start", "end") and ini.shape == "catenary":
+                continue
+            if getattr(ini, key) is not None:
+                raise Invalid(path + (key,), f"key {key} does not go with shape = {ini.shape}",
+                              "start and end with catenary, nodes with nodes")
+        if ini.shape == "nodes":
+            if ini.nodes is None:
+                raise Invalid(path + ("nodes",), "missing required key for shape = nodes",
+                              f"{n + 1} rows [r_x, r_y, r_x', r_y']")
+            if len(ini.nodes) != n + 1:
+                raise Invalid(path + ("nodes",), f"{len(ini.nodes)} rows for {n} elements",
+                              f"{n + 1} rows [r_x, r_y, r_x', r_y']")
+        if ini.velocities is not None:
+            if ini.velocity != (0.0, 0.0):
+                raise Invalid(path + ("velocities",), "velocities cannot be given together with velocity",
+                              "one of velocity, velocities")
+            if len(ini.velocities) != n + 1:
+                raise Invalid(path + ("velocities",), f"{len(ini.velocities)} rows for {n} elements",
+                              f"{n + 1} rows")
+
+    def bodies(self):
+        for name, b in self.spec.bodies.items():
+            path = ("bodies", name)
+            self.exclusive(path, b, ("position", "at"))
+            if b.at is not None:
+                self.point(path + ("at",), b.at, before_body=name)
+
+    def joints(self):
+        for name, j in self.spec.joints.items():
+            path = ("joints", name)
+            if j.type == "clamp":
+                self.beam(path + ("beam",), j.beam)
+                self.node_index(path + ("node",), j.beam, j.node)
+            elif j.type in ("pin", "fixed", "prescribed_point"):
+                self.point(path + ("point",), j.point)
+            elif j.type == "revolute":
+                self.point(path + ("a",), j.a)
+                self.point(path + ("b",), j.b)
+            if j.type in ("fixed", "sliding", "prescribed_body"):
+                self.body(path + ("body",), j.body)
+            if j.type == "sliding":
+                self.beam(path + ("beam",), j.beam)
+                self.arc_length(path + ("s",), j.beam, j.s, "initial arc length s =")
+
+    def loads(self):
+        for name, f in self.spec.loads.items():
+            path = ("loads", name)
+            if f.type == "point_force":
+                self.point(path + ("point",), f.point)
+            elif f.type == "torque":
+                self.body(path + ("body",), f.body)
+            else:
+                self.point(path + ("a",), f.a)
+                self.point(path + ("b",), f.b)
+
+    def solver(self):
+        sol = self.spec.solver
+        out = self.spec.outputs.dt
+        if out is not None and out < sol.dt * (1 - 1e-9):
+            raise Invalid(("outputs", "dt"), f"{out:g} s is shorter than solver.dt = {sol.dt:g} s",
+                          f"a number >= {sol.dt:g} [s]")
+
+    def outputs(self):
+        for name, o in self.spec.outputs.columns.items():
+            path = ("outputs", "columns", name)
+            if o.type in ("node", "point", "stress"):
+                self.beam(path + ("beam",), o.beam)
+            if o.type == "node":
+                self.node_index(path + ("node",), o.beam, o.node)
+            elif o.type == "point":
+                self.arc_length(path + ("s",), o.beam, o.s)
+            elif o.type == "body":
+                self.body(path + ("body",), o.body)
+                self.exclusive(path, o, ("local", "point"))
+                if o.point is not None:
+                    self.body_point(path + ("point",), o.body, o.point)
+                if (o.local is not None or o.point is not None) and o.component == "theta":
+                    raise Invalid(path + ("component",), "theta is the body's angle, not a point's",
+                                  '"x" or "y" with local or point')
+            elif o.type in ("sliding", "sliding_point"):
+                self.joint(path + ("joint",), o.joint, ("sliding",))
+            elif o.type == "stress":
+                self.exclusive(path, o, ("s", "element"), required=True)
+                if o.s is not None:
+                    self.arc_length(path + ("s",), o.beam, o.s)
+                elif o.element >= self.elements[o.beam]:
+                    n = self.elements[o.beam]
+                    raise Invalid(path + ("element",), f'element {o.element} is outside beam "{o.beam}"',
+                                  f"an integer 0 .. {n - 1}")
+            elif o.type == "reaction":
+                self.joint(path + ("joint",), o.joint)
+                self.exclusive(path, o, ("component", "index"), required=True)
+                j = self.spec.joints[o.joint]
+                if o.component is not None and j.type != "sliding":
+                    raise Invalid(path + ("component",), f'normal and tangential need a sliding joint, '
+                                  f'"{o.joint}" is a {j.type} joint', "index = 0 .. equations − 1")
+                size = (4 if j.mode == "full" else 3) if j.type == "clamp" else JOINT_SIZE[j.type]
+                if o.index is not None and o.index >= size:
+                    raise Invalid(path + ("index",), f'joint "{o.joint}" has {size} equations',
+                                  f"an integer 0 .. {size - 1}")
+
+    def run(self):
+        self.names()
+        self.beams()
+        self.bodies()
+        self.joints()
+        self.loads()
+        self.solver()
+        self.outputs()
+
+
+def check(spec: S.ScenarioSpec) -> Checker:
+    """Run every check (see module docstring); returns the checker with beam lengths
+    and element counts. Raises :class:`~.errors.Invalid` on the first problem."""
+    c = Checker(spec)
+    c.run()
+    return c

@@ -1,0 +1,463 @@
+"""The typed schema of a scenario file (pydantic v2): every key, its type, unit,
+default and range.
+
+One class per TOML table; unknown keys are rejected (``extra="forbid"``) and types are
+strict (a string is not a number, ``true`` is not 1). Units are SI and are stored on
+each field (``unit``) for messages and for the generated documentation
+(``docs/scenario-format.md``). Checks that involve several keys or names of other
+entities (a joint naming a beam that does not exist, an arc length outside a beam)
+are in :mod:`ancf_jax.scenario.checks`.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, ClassVar, Literal, Optional, Union
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from ..element.strain_energy import AXIAL_STRAINS, CURVATURES
+from ..outputs import COMPONENTS
+from ..simulation import SOLVERS
+from .types import Nodes4, Points2, Quadrature, TimeFunction, Vec2
+
+#: current version of the file format
+FORMAT_VERSION = 1
+#: most elements of one beam
+MAX_ELEMENTS = 2000
+
+
+def key(default=..., *, unit: str = "", doc: str, **constraints):
+    """A schema field with its unit [SI] and a one-line description."""
+    return Field(default, description=doc, json_schema_extra={"unit": unit}, **constraints)
+
+
+class Table(BaseModel):
+    """Base of every table: strict types, unknown keys rejected, immutable."""
+
+    model_config = ConfigDict(extra="forbid", strict=True, frozen=True)
+
+
+# ----------------------------------------------------------------------------- points
+class PointRef(Table):
+    """A point, named by entity: ``{ ground = [x, y] }``, ``{ body = "b" }`` (its centre),
+    ``{ body = "b", local = [x, y] }``, ``{ body = "b", point = "p1" }`` (a named body
+    point), ``{ beam = "a", node = -1 }`` (a node; −1 is the last) or
+    ``{ beam = "a", s = 0.2 }`` (the material point at reference arc length s)."""
+
+    accepts: ClassVar[str] = "a point (see Points)"
+
+    ground: Optional[Vec2] = key(None, unit="m", doc="a fixed point of the ground")
+    body: Optional[str] = key(None, doc="a rigid body's name")
+    local: Optional[Vec2] = key(None, unit="m", doc="with body: point in the body frame (default its centre)")
+    point: Optional[str] = key(None, doc="with body: name of a point of the body (its `points` table)")
+    beam: Optional[str] = key(None, doc="a beam's name")
+    node: Optional[int] = key(None, doc="with beam: node index, 0 the first, −1 the last")
+    s: Optional[float] = key(None, unit="m", ge=0.0, allow_inf_nan=False,
+                             doc="with beam: reference arc length from the first node")
+
+
+# ----------------------------------------------------------------------------- beams
+class Straight(Table):
+    """A straight stress-free beam."""
+
+    type: Literal["straight"] = key(doc="geometry type")
+    start: Vec2 = key((0.0, 0.0), unit="m", doc="position of the first node")
+    direction: Vec2 = key((1.0, 0.0), doc="direction from the first node (any non-zero length)")
+    length: float = key(unit="m", gt=0.0, allow_inf_nan=False, doc="length L")
+
+
+class ThroughPoints(Table):
+    """A stress-free beam through given points with given slopes (one element per
+    interval; element lengths are the arc lengths of the Hermite cubics)."""
+
+    type: Literal["points"] = key(doc="geometry type")
+    points: Points2 = key(unit="m", doc="node positions, at least 2")
+    slopes: Points2 = key(doc="tangent directions at the nodes (normalized), as many as points")
+
+
+class Arc(Table):
+    """A stress-free circular arc, counter-clockwise if end_angle > start_angle."""
+
+    type: Literal["arc"] = key(doc="geometry type")
+    center: Vec2 = key(unit="m", doc="centre of the circle")
+    radius: float = key(unit="m", gt=0.0, allow_inf_nan=False, doc="radius")
+    start_angle: float = key(unit="rad", allow_inf_nan=False, doc="angle of the first node")
+    end_angle: float = key(unit="rad", allow_inf_nan=False, doc="angle of the last node (≠ start_angle)")
+
+
+Geometry = Annotated[Union[Straight, ThroughPoints, Arc], Field(discriminator="type")]
+
+
+class SectionSpec(Table):
+    """Cross-section and material. Give E; A and I, or a diameter (solid circle) from
+    which missing A and I follow; and exactly one of mass_per_length, density, mass."""
+
+    E: float = key(unit="Pa", gt=0.0, allow_inf_nan=False, doc="Young's modulus")
+    A: Optional[float] = key(None, unit="m²", gt=0.0, allow_inf_nan=False,
+                             doc="area (default π d²/4 from diameter)")
+    I: Optional[float] = key(None, unit="m⁴", gt=0.0, allow_inf_nan=False,
+                             doc="second moment of area (default π d⁴/64 from diameter)")
+    diameter: Optional[float] = key(None, unit="m", gt=0.0, allow_inf_nan=False,
+                                    doc="diameter d of a solid circular section")
+    mass_per_length: Optional[float] = key(None, unit="kg/m", gt=0.0, allow_inf_nan=False,
+                                           doc="ρA")
+    density: Optional[float] = key(None, unit="kg/m³", gt=0.0, allow_inf_nan=False,
+                                   doc="ρ (ρA = ρ·A)")
+    mass: Optional[float] = key(None, unit="kg", gt=0.0, allow_inf_nan=False,
+                                doc="total mass of the beam (ρA = mass / L)")
+    fibre: Optional[float] = key(None, unit="m", gt=0.0, allow_inf_nan=False,
+                                 doc="outer-fibre distance for stresses (default d/2, else √(2I/A))")
+
+
+class FormulationSpec(Table):
+    """Strain measures and quadrature rules of the element energy (paper Eq. 8)."""
+
+    axial_strain: Literal[AXIAL_STRAINS] = key("green_lagrange", doc="axial strain measure")
+    curvature: Literal[CURVATURES] = key("exact", doc="curvature: exact (Eq. 16), material, "
+                                                      "small_strain (Eq. 17, straight beams only)")
+    axial_quadrature: Quadrature = key(("lobatto", 3), doc="[kind, points] of the axial term")
+    bending_quadrature: Quadrature = key(("gauss", 3), doc="[kind, points] of the bending term")
+
+
+class BeamInitial(Table):
+    """Initial shape and velocity of a beam (default: its stress-free reference, at rest)."""
+
+    shape: Literal["reference", "catenary", "nodes"] = key(
+        "reference", doc="reference: stress-free geometry; catenary: inextensible catenary "
+                         "between start and end (a guess for a slack cable); nodes: given")
+    start: Optional[Vec2] = key(None, unit="m", doc="catenary: first end (default the first node)")
+    end: Optional[Vec2] = key(None, unit="m", doc="catenary: last end (required), right of start")
+    nodes: Optional[Nodes4] = key(None, unit="m, -", doc="nodes: initial nodal coordinates, (n+1) rows")
+    velocity: Vec2 = key((0.0, 0.0), unit="m/s", doc="uniform initial velocity of every node")
+    velocities: Optional[Nodes4] = key(None, unit="m/s, 1/s",
+                                       doc="initial nodal velocities, (n+1) rows (instead of velocity)")
+
+
+class BeamSpec(Table):
+    """An ANCF beam or cable (paper Eqs. 1–11)."""
+
+    geometry: Geometry = key(doc="stress-free reference geometry: type = straight, points or arc")
+    elements: Optional[int] = key(None, ge=1, le=MAX_ELEMENTS,
+                                  doc="number of elements (points: one per interval, the default)")
+    section: SectionSpec = key(doc="cross-section and material")
+    alpha: float = key(0.0, unit="1/s", ge=0.0, allow_inf_nan=False,
+                       doc="Rayleigh mass-proportional damping α (Eq. 11)")
+    beta: float = key(0.0, unit="s", ge=0.0, allow_inf_nan=False,
+                      doc="Rayleigh stiffness-proportional damping β (Eq. 11)")
+    formulation: FormulationSpec = key(FormulationSpec(), doc="strain measures and quadrature")
+    initial: BeamInitial = key(BeamInitial(), doc="initial shape and velocity")
+
+
+# ----------------------------------------------------------------------------- bodies
+class BodySpec(Table):
+    """A rigid body (paper Eq. 14): coordinates x, y of its centre and angle θ."""
+
+    mass: float = key(unit="kg", gt=0.0, allow_inf_nan=False, doc="mass m")
+    inertia: float = key(unit="kg·m²", gt=0.0, allow_inf_nan=False, doc="moment of inertia J about the centre")
+    position: Optional[Vec2] = key(None, unit="m", doc="initial position of the centre (default [0, 0])")
+    at: Optional[PointRef] = key(None, doc="instead of position: the centre starts at this point of a "
+                                           "beam's initial shape or of a body declared earlier")
+    angle: float = key(0.0, unit="rad", allow_inf_nan=False, doc="initial angle θ")
+    velocity: Vec2 = key((0.0, 0.0), unit="m/s", doc="initial velocity of the centre")
+    angular_velocity: float = key(0.0, unit="rad/s", allow_inf_nan=False, doc="initial angular velocity")
+    points: dict[str, Vec2] = key({}, unit="m", doc="named points in the body frame, e.g. { hook = [0, 0.5] }")
+
+
+# ----------------------------------------------------------------------------- joints
+class ClampSpec(Table):
+    """Clamp a beam node to the ground at its initial position and slope."""
+
+    type: Literal["clamp"] = key(doc="joint type")
+    beam: str = key(doc="beam name")
+    node: int = key(0, doc="node index (−1: the last)")
+    mode: Literal["full", "direction"] = key("full", doc="full: slope vector fixed (4 equations); "
+                                                         "direction: slope direction only (3)")
+
+
+class PinSpec(Table):
+    """Pin a point to the ground: position fixed, rotation free."""
+
+    type: Literal["pin"] = key(doc="joint type")
+    point: PointRef = key(doc="the pinned point")
+    location: Optional[Vec2] = key(None, unit="m", doc="ground location (default: the point's initial position)")
+
+
+class RevoluteSpec(Table):
+    """Two points (of bodies or beams) coincide, rotation free."""
+
+    type: Literal["revolute"] = key(doc="joint type")
+    a: PointRef = key(doc="first point")
+    b: PointRef = key(doc="second point")
+
+
+class FixedSpec(Table):
+    """Rigid connection of a beam node (or body point) to a body: the body rotates with
+    the beam slope there."""
+
+    type: Literal["fixed"] = key(doc="joint type")
+    point: PointRef = key(doc="the beam node (or body point) the body is fixed to")
+    body: str = key(doc="body name")
+    local: Optional[Vec2] = key(None, unit="m", doc="body point at `point` (default: where `point` starts)")
+
+
+class SlidingSpec(Table):
+    """Sliding joint (paper §4, Eqs. 19–21): a body point stays on a beam's centre line
+    at the sliding coordinate s, without friction."""
+
+    type: Literal["sliding"] = key(doc="joint type")
+    body: str = key(doc="body name")
+    beam: str = key(doc="beam name")
+    s: float = key(unit="m", ge=0.0, allow_inf_nan=False, doc="initial arc length s₀ along the beam (0..L)")
+    local: Vec2 = key((0.0, 0.0), unit="m", doc="the sliding point in the body frame")
+    rate: float = key(0.0, unit="m/s", allow_inf_nan=False, doc="initial ṡ")
+    hold: bool = key(False, doc="false: held at s₀ only while the static equilibrium is found "
+                                "(initial.mode = static), free from t = 0; true: held for the whole run")
+
+
+class PrescribedPointSpec(Table):
+    """A point follows (x(t), y(t)) [m]."""
+
+    type: Literal["prescribed_point"] = key(doc="joint type")
+    point: PointRef = key(doc="the driven point")
+    x: TimeFunction = key(unit="m", doc="x(t)")
+    y: TimeFunction = key(unit="m", doc="y(t)")
+
+
+class PrescribedBodySpec(Table):
+    """A coordinate of a body follows a function of time."""
+
+    type: Literal["prescribed_body"] = key(doc="joint type")
+    body: str = key(doc="body name")
+    coordinate: Literal["x", "y", "theta"] = key(doc="the driven coordinate")
+    value: TimeFunction = key(unit="m or rad", doc="its value over time")
+
+
+Joint = Annotated[Union[ClampSpec, PinSpec, RevoluteSpec, FixedSpec, SlidingSpec,
+                        PrescribedPointSpec, PrescribedBodySpec], Field(discriminator="type")]
+
+
+# ----------------------------------------------------------------------------- loads
+class PointForceSpec(Table):
+    """A force of fixed direction at a point, F·f(t)."""
+
+    type: Literal["point_force"] = key(doc="load type")
+    point: PointRef = key(doc="where it acts")
+    force: Vec2 = key(unit="N", doc="force vector F")
+    time_function: Optional[TimeFunction] = key(None, doc="scale f(t) (default 1)")
+
+
+class TorqueSpec(Table):
+    """A torque τ·f(t) on a body."""
+
+    type: Literal["torque"] = key(doc="load type")
+    body: str = key(doc="body name")
+    torque: float = key(unit="N·m", allow_inf_nan=False, doc="torque τ (counter-clockwise positive)")
+    time_function: Optional[TimeFunction] = key(None, doc="scale f(t) (default 1)")
+
+
+class SpringDamperSpec(Table):
+    """Linear spring-damper between two points: tension k (ℓ − ℓ₀) + c ℓ̇."""
+
+    type: Literal["spring_damper"] = key(doc="load type")
+    a: PointRef = key(doc="first point")
+    b: PointRef = key(doc="second point")
+    stiffness: float = key(unit="N/m", ge=0.0, allow_inf_nan=False, doc="k")
+    damping: float = key(0.0, unit="N·s/m", ge=0.0, allow_inf_nan=False, doc="c")
+    rest_length: Optional[float] = key(None, unit="m", ge=0.0, allow_inf_nan=False,
+                                       doc="ℓ₀ (default: the initial distance)")
+
+
+Load = Annotated[Union[PointForceSpec, TorqueSpec, SpringDamperSpec], Field(discriminator="type")]
+
+
+# ----------------------------------------------------------------------------- state, solvers
+class InitialSpec(Table):
+    """How the initial state is obtained."""
+
+    mode: Literal["given", "static"] = key(
+        "given", doc="given: as written (assembled onto the joints); static: static equilibrium "
+                     "under the loads at t = 0 with every sliding joint held, at rest")
+
+
+class StaticsSpec(Table):
+    """Static solver settings (initial.mode = static, and `ancf-jax static`)."""
+
+    load_steps: int = key(10, ge=1, le=1000, doc="equal load increments")
+    time: float = key(0.0, unit="s", ge=0.0, allow_inf_nan=False,
+                      doc="time at which time functions are evaluated by `ancf-jax static` and "
+                          "modal about = equilibrium (the static initial state always uses t = 0)")
+    tolerance: float = key(1e-9, gt=0.0, allow_inf_nan=False, doc="residual tolerance, relative to the largest load")
+
+
+class ModalSpec(Table):
+    """Modal analysis settings (`ancf-jax modal`)."""
+
+    modes: int = key(10, ge=1, le=1000, doc="number of lowest modes reported")
+    about: Literal["initial", "equilibrium"] = key(
+        "initial", doc="initial: about the initial state (unloaded stiffness); equilibrium: about "
+                       "the static equilibrium, with the stress stiffness")
+
+
+class GeneralizedAlphaOptions(Table):
+    """Options of the generalized-α solver (each defaults to the solver's own default)."""
+
+    rho_inf: Optional[float] = key(None, ge=0.0, le=1.0, allow_inf_nan=False,
+                                   doc="spectral radius at infinity (default 0.9)")
+    newton_tol: Optional[float] = key(None, unit="m", gt=0.0, allow_inf_nan=False,
+                                      doc="Newton tolerance on the position correction (default 1e-10)")
+    max_iterations: Optional[int] = key(None, ge=1, le=1000, doc="Newton iterations per step (default 16)")
+    refresh_every: Optional[int] = key(None, ge=1, le=1000,
+                                       doc="refactor after this many iterations (default 6)")
+    contraction: Optional[float] = key(None, gt=0.0, lt=1.0, allow_inf_nan=False,
+                                       doc="refactor when a correction shrinks by less (default 0.25)")
+    velocity_projection: Optional[bool] = key(None, doc="project velocities onto the constraints (default true)")
+    dense: Optional[bool] = key(None, doc="dense LU instead of the block-tridiagonal solver (default false)")
+
+
+class RK4Options(Table):
+    """Options of the RK4 solver."""
+
+    projection: Optional[bool] = key(None, doc="project onto the constraints after each step (default true)")
+    baumgarte: Optional[float] = key(None, unit="rad/s", ge=0.0, allow_inf_nan=False,
+                                     doc="Baumgarte ω (default 0)")
+    dense: Optional[bool] = key(None, doc="dense LU instead of the block-tridiagonal solver (default false)")
+
+
+class DiffraxOptions(Table):
+    """Options of the adaptive diffrax solvers (tsit5, dopri5, kvaerno5)."""
+
+    rtol: Optional[float] = key(None, gt=0.0, allow_inf_nan=False, doc="relative tolerance (default 1e-6)")
+    atol: Optional[float] = key(None, gt=0.0, allow_inf_nan=False, doc="absolute tolerance (default 1e-8)")
+    max_steps: Optional[int] = key(None, ge=1, doc="steps per output chunk (default 1e7)")
+    baumgarte: Optional[float] = key(None, unit="rad/s", ge=0.0, allow_inf_nan=False,
+                                     doc="Baumgarte ω (default 50)")
+    dense: Optional[bool] = key(None, doc="dense LU instead of the block-tridiagonal solver (default false)")
+
+
+#: the options table that applies to each solver (the others are checked, not used)
+SOLVER_TABLES = {"generalized-alpha": "generalized_alpha", "rk4": "rk4", "tsit5": "diffrax",
+                 "dopri5": "diffrax", "kvaerno5": "diffrax"}
+
+
+class SolverSpec(Table):
+    """Time integration: solver, step, span and tolerances. Each solver has its own
+    options table; only the chosen solver's table is used, so `--set solver.name=...`
+    switches solvers without editing the file."""
+
+    name: Literal[SOLVERS] = key("generalized-alpha", doc="time integrator")
+    dt: float = key(1e-3, unit="s", gt=0.0, allow_inf_nan=False,
+                    doc="step (fixed-step solvers) or initial step (adaptive)")
+    t_end: float = key(unit="s", gt=0.0, allow_inf_nan=False, doc="end time; the run starts at t = 0")
+    drift_tolerance: float = key(1e-6, unit="m", gt=0.0, allow_inf_nan=False,
+                                 doc="stop when max|Φ| exceeds this")
+    locate_crossings: bool = key(False, doc="split steps at node crossings of sliding joints")
+    generalized_alpha: GeneralizedAlphaOptions = key(GeneralizedAlphaOptions(),
+                                                     doc="options used when name = generalized-alpha")
+    rk4: RK4Options = key(RK4Options(), doc="options used when name = rk4")
+    diffrax: DiffraxOptions = key(DiffraxOptions(), doc="options used when name = tsit5, dopri5 or kvaerno5")
+
+
+# ----------------------------------------------------------------------------- outputs
+class NodeOutput(Table):
+    """A coordinate of a beam node."""
+
+    type: Literal["node"] = key(doc="output type")
+    beam: str = key(doc="beam name")
+    node: int = key(-1, doc="node index (−1: the last, the tip)")
+    component: Literal[COMPONENTS["node"]] = key("x", unit="m, -", doc="coordinate")
+
+
+class PointOutput(Table):
+    """A coordinate of the material point of a beam at arc length s."""
+
+    type: Literal["point"] = key(doc="output type")
+    beam: str = key(doc="beam name")
+    s: float = key(unit="m", ge=0.0, allow_inf_nan=False, doc="reference arc length")
+    component: Literal[COMPONENTS["point"]] = key("x", unit="m", doc="coordinate")
+
+
+class BodyOutput(Table):
+    """The pose of a body, or the position of one of its points."""
+
+    type: Literal["body"] = key(doc="output type")
+    body: str = key(doc="body name")
+    component: Literal[COMPONENTS["body"]] = key("x", unit="m, rad", doc="coordinate")
+    local: Optional[Vec2] = key(None, unit="m", doc="x, y of this body-frame point (default the centre)")
+    point: Optional[str] = key(None, doc="x, y of this named point of the body")
+
+
+class SlidingOutput(Table):
+    """The sliding coordinate s of a sliding joint."""
+
+    type: Literal["sliding"] = key(doc="output type")
+    joint: str = key(doc="sliding joint name")
+    component: Literal[COMPONENTS["sliding"]] = key("s", unit="m", doc="the arc length s")
+
+
+class SlidingPointOutput(Table):
+    """The position of a sliding joint's point on its beam."""
+
+    type: Literal["sliding_point"] = key(doc="output type")
+    joint: str = key(doc="sliding joint name")
+    component: Literal[COMPONENTS["sliding_point"]] = key("x", unit="m", doc="coordinate")
+
+
+class StressOutput(Table):
+    """Bending stress σ = −E y (κ − κ₀) (Eq. 18) at arc length s, or in an element at ξ."""
+
+    type: Literal["stress"] = key(doc="output type")
+    beam: str = key(doc="beam name")
+    s: Optional[float] = key(None, unit="m", ge=0.0, allow_inf_nan=False, doc="reference arc length")
+    element: Optional[int] = key(None, ge=0, doc="instead of s: element index (0 the first)")
+    xi: float = key(0.5, ge=0.0, le=1.0, allow_inf_nan=False, doc="with element: local coordinate ξ = x/l")
+    fibre: Optional[float] = key(None, unit="m", allow_inf_nan=False,
+                                 doc="fibre distance y along the left normal (default the section's fibre)")
+    measure: Literal[CURVATURES] = key("exact", doc="curvature: exact (Eq. 16) or small_strain (Eq. 17)")
+
+
+class ReactionOutput(Table):
+    """A joint reaction: a Lagrange multiplier component (index), or the normal or
+    tangential reaction of a sliding joint on its body [N]."""
+
+    type: Literal["reaction"] = key(doc="output type")
+    joint: str = key(doc="joint name")
+    component: Optional[Literal["normal", "tangential"]] = key(None, unit="N", doc="sliding joints")
+    index: Optional[int] = key(None, ge=0, le=3, doc="multiplier index (0 .. equations − 1)")
+
+
+class EnergyOutput(Table):
+    """An energy history of the whole system [J]."""
+
+    type: Literal["energy"] = key(doc="output type")
+    component: Literal[COMPONENTS["energy"]] = key("total", unit="J", doc="which energy")
+
+
+Output = Annotated[Union[NodeOutput, PointOutput, BodyOutput, SlidingOutput, SlidingPointOutput,
+                         StressOutput, ReactionOutput, EnergyOutput], Field(discriminator="type")]
+
+
+class OutputsSpec(Table):
+    """What is written: named CSV columns and the sample interval."""
+
+    dt: Optional[float] = key(None, unit="s", gt=0.0, allow_inf_nan=False,
+                              doc="sample interval (default every solver step)")
+    columns: dict[str, Output] = key({}, doc="named output columns (the CSV header)")
+
+
+# ----------------------------------------------------------------------------- root
+class ScenarioSpec(Table):
+    """A whole scenario file."""
+
+    version: Literal[FORMAT_VERSION] = key(FORMAT_VERSION, doc="file format version")
+    name: Optional[str] = key(None, doc="scenario name (default: the file name)")
+    description: str = key("", doc="free text")
+    gravity: Vec2 = key((0.0, -9.81), unit="m/s²", doc="gravitational acceleration")
+    beams: dict[str, BeamSpec] = key({}, doc="beams by name")
+    bodies: dict[str, BodySpec] = key({}, doc="rigid bodies by name")
+    joints: dict[str, Joint] = key({}, doc="joints by name")
+    loads: dict[str, Load] = key({}, doc="applied loads and force elements by name")
+    initial: InitialSpec = key(InitialSpec(), doc="initial state")
+    statics: StaticsSpec = key(StaticsSpec(), doc="static solver")
+    modal: ModalSpec = key(ModalSpec(), doc="modal analysis")
+    solver: SolverSpec = key(doc="time integration")
+    outputs: OutputsSpec = key(OutputsSpec(), doc="output columns and sampling")

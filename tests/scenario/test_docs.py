@@ -1,0 +1,40 @@
+"""The format page documents every key of the schema and is up to date with it."""
+
+from pathlib import Path
+
+from ancf_jax.integrators.diffrax_solvers import DiffraxSolver
+from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
+from ancf_jax.integrators.rk4 import RK4
+from ancf_jax.scenario import docs, schema
+from ancf_jax.scenario.expressions import FUNCTIONS
+
+PAGE = Path(__file__).resolve().parents[2] / "docs" / "scenario-format.md"
+
+
+def test_page_is_generated_from_the_current_schema():
+    text = PAGE.read_text(encoding="utf-8")
+    assert docs.splice(text) == text, "run: python -m ancf_jax.scenario.docs docs/scenario-format.md"
+
+
+def test_every_table_and_key_is_documented():
+    text = PAGE.read_text(encoding="utf-8")
+    classes = {c for _, c in docs.TABLES}
+    documented = {name for name in dir(schema) if isinstance(getattr(schema, name), type)
+                  and issubclass(getattr(schema, name), schema.Table) and getattr(schema, name) is not schema.Table}
+    assert documented == {c.__name__ for c in classes}
+    for cls in classes:
+        for key, field in cls.model_fields.items():
+            assert f"| `{key}` |" in text, (cls.__name__, key)
+            assert field.description, (cls.__name__, key)
+    for name in FUNCTIONS:
+        assert f"| `{name}` |" in text
+
+
+def test_solver_options_are_options_of_the_solvers():
+    classes = {"generalized-alpha": GeneralizedAlpha, "rk4": RK4, "tsit5": DiffraxSolver,
+               "dopri5": DiffraxSolver, "kvaerno5": DiffraxSolver}
+    assert set(schema.SOLVER_TABLES) == set(classes)
+    for name, table in schema.SOLVER_TABLES.items():
+        options = schema.SolverSpec.model_fields[table].annotation.model_fields
+        known = set(classes[name].__dataclass_fields__)
+        assert set(options) <= known, (name, set(options) - known)

@@ -1,0 +1,95 @@
+"""The command-line contracts of ``ancf-jax run|static|modal`` for M1 and M2."""
+
+import csv
+import json
+
+import pytest
+
+from ancf_jax.cli import main
+
+
+@pytest.mark.parametrize("argv,option", [
+    (["run", "m1", "--t-end", "0"], "--t-end"),
+    (["run", "m1", "--dt", "-1e-3"], "--dt"),
+    (["run", "m1", "--elements", "0"], "--elements"),
+    (["run", "m2", "--elements", "12,0"], "--elements"),
+    (["run", "m1", "--solver", "euler"], "--solver"),
+    (["run", "m1", "--output-dt", "nan"], "--output-dt"),
+    (["static", "m1", "--elements", "-2"], "--elements"),
+    (["modal", "m1", "--modes", "0"], "--modes"),
+    (["modal", "m1", "--about", "deformed"], "--about"),
+    (["run", "m3"], "m3"),
+    (["run", "m1", "--set", "solver.dt=-1"], "solver.dt"),
+    (["run", "m1", "--rho-inf", "1.5"], "--rho-inf"),
+    (["run", "m2", "--elements", "12,x"], "--elements"),
+    (["check", "m1", "--set", "beams.beam.elements=0"], "beams.beam.elements"),
+])
+def test_bad_options_exit_nonzero_with_one_line(argv, option, capsys):
+    try:
+        code = main(argv)
+    except SystemExit as e:  # errors found by argparse itself
+        code = e.code
+    assert code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert option in err
+
+
+def test_static_m1_json(capsys):
+    assert main(["static", "m1", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert set(data) == {"tip_x", "tip_y", "tip_rotation", "sigma_e1_mid"}
+    assert data["tip_y"] < -0.2 and data["sigma_e1_mid"] > 0  # upper fibre in tension
+
+
+def test_modal_m1_json(capsys):
+    assert main(["modal", "m1", "--modes", "3", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert list(data) == ["frequencies_hz"] and len(data["frequencies_hz"]) == 3
+    f = data["frequencies_hz"]
+    assert 0 < f[0] < f[1] < f[2]
+
+
+def test_run_m1_writes_every_file(tmp_path, capsys):
+    out = tmp_path / "m1"
+    assert main(["run", "m1", "--t-end", "0.05", "--out", str(out), "--no-progress"]) == 0
+    with open(out / "m1_n6.csv") as f:
+        rows = list(csv.reader(f))
+    assert rows[0] == ["t", "tip_x", "tip_y", "sigma_e1_mid"]
+    assert len(rows) == 1 + 51 and float(rows[-1][0]) == pytest.approx(0.05)
+    summary = json.loads((out / "summary.json").read_text())
+    for key in ("elements", "solver", "dt", "t_end", "wall_time_s", "compile_time_s", "tip_y_min",
+                "max_abs_sigma_e1_mid", "max_constraint_violation", "energy_balance_error"):
+        assert key in summary
+    assert summary["elements"] == 6 and summary["t_end"] == pytest.approx(0.05)
+    for name in ("m1_n6.npz", "fig5_shapes.png", "fig6_tip_displacement.png",
+                 "fig7_stress_e1_mid.png", "fig8_stress_map.png"):
+        assert (out / name).stat().st_size > 0
+
+
+def test_check_summarizes_without_running(capsys):
+    assert main(["check", "m2"]) == 0
+    out = capsys.readouterr().out
+    assert "valid scenario 'm2'" in out and "sliding" in out and "point1_x" in out
+
+
+def test_static_m2_json_keys(capsys):
+    assert main(["static", "m2", "--elements", "12", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert set(data) == {"point1_x", "point1_y", "rb2_x", "rb2_y", "horizontal_tension"}
+    assert data["rb2_y"] == pytest.approx(data["point1_y"] - 0.5)  # cabin hangs below
+    assert data["horizontal_tension"] > 0
+
+
+def test_run_any_scenario_file_with_overrides(tmp_path, capsys):
+    out = tmp_path / "pend"
+    argv = ["run", "flexible_pendulum", "--set", "beams.pendulum.elements=4", "--t-end", "0.01",
+            "--out", str(out), "--no-progress"]
+    assert main(argv) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["model"] == "flexible_pendulum"
+    csvs = sorted(p.name for p in out.glob("*.csv"))
+    assert csvs == ["flexible_pendulum.csv"]
+    with open(out / csvs[0]) as f:
+        header = next(csv.reader(f))
+    assert header[0] == "t" and len(header) > 1
