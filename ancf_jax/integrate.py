@@ -220,7 +220,9 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
             if options.max_halvings:
                 fine = (info.converged & jnp.all(jnp.isfinite(new.q)) & jnp.all(jnp.isfinite(new.v)))
                 c, it, conv = _retry_in_substeps(system, integrator, loop.carry, h, context, options, ~fine)
-                new = jax.tree.map(lambda a, b: jnp.where(fine, a, b), new, c)
+                # a step that fails even in the finest substeps keeps its original
+                # outcome, so the status names the first cause (NaN or Newton)
+                new = jax.tree.map(lambda a, b: jnp.where(fine | ~conv, a, b), new, c)
                 info = StepInfo(info.iterations + it, fine | conv)
             new2, extra, crossed = _crossing(system, integrator, loop.carry, new, h, context, options)
             it = info.iterations

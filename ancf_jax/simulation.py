@@ -37,7 +37,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .errors import ModelError, SimulationError
-from .integrate import LoopState, RunOptions, initial_loop, integrate_fixed, segment_of
+from .integrate import LoopState, RunOptions, initial_loop, integrate_fixed, segment_of, sliding_beams
 from .integrators.base import OK, REASONS, AbstractIntegrator, Carry
 from .integrators.diffrax_solvers import KINDS as DIFFRAX_KINDS
 from .integrators.diffrax_solvers import DiffraxSolver, succeeded
@@ -145,7 +145,23 @@ def trajectory(system: System, state: State, solver, *, t_end: float, dt: float,
 
 
 # ---------------------------------------------------------------------------- simulate
-def _failure_message(status: int, t_fail: float, system: System, options: RunOptions) -> str:
+def _joints_that_left(system: System, q, v, t_last: float, t_fail: float) -> tuple[str, ...]:
+    """Names of the sliding joints whose coordinate, continued from the last good state
+    (q, v at t_last) to t_fail, lies outside [0, length] of its beam (all of them if
+    none does, e.g. when the last state is unknown)."""
+    if q is None or not system.sliding_names:
+        return tuple(system.sliding_names)
+    dt = max(t_fail - t_last, 0.0)
+    out = []
+    for j, b in sliding_beams(system).items():
+        s = float(system.sliding(q, j)) + dt * float(system.sliding(v, j))
+        if not 0.0 <= s <= float(system.beams[b].mesh.length):
+            out.append(system.sliding_names[j])
+    return tuple(out) or tuple(system.sliding_names)
+
+
+def _failure_message(status: int, t_fail: float, system: System, options: RunOptions,
+                     last=None) -> str:
     reason = REASONS.get(status, "unknown")
     if reason == "nan":
         why = "the state became NaN or infinite (the step may be too large for the solver)"
@@ -155,8 +171,10 @@ def _failure_message(status: int, t_fail: float, system: System, options: RunOpt
         why = (f"the constraint violation exceeded drift_tolerance = {options.drift_tolerance:g} "
                "(reduce dt or tighten the solver tolerances)")
     elif reason == "left_beam":
-        names = ", ".join(system.sliding_names)
-        why = f"a sliding joint ({names}) left its beam at an end"
+        names = _joints_that_left(system, *(last or (None, None, 0.0)), t_fail)
+        which = (f"the sliding joint {names[0]!r}" if len(names) == 1 else
+                 "a sliding joint (" + ", ".join(names) + ")")
+        why = f"{which} left its beam at an end"
     else:
         why = "the solver failed"
     return f"simulation stopped at t = {t_fail:.6g} s: {why}"
@@ -306,7 +324,8 @@ def _results_fixed(system, segs, loop, solver, n_int, sub, h, t0, compile_s, wal
         n_rows = _rows_until_failure(cat["t"], n_rows)
     cat = {k: v[:n_rows] for k, v in cat.items()}
     cat["t"] = t0 + h * sub * np.arange(n_rows)  # exact grid (the carry accumulates h)
-    message = "" if status == OK else _failure_message(status, t_fail, system, options)
+    message = "" if status == OK else _failure_message(
+        status, t_fail, system, options, last=(cat["q"][-1], cat["v"][-1], float(cat["t"][-1])))
     return Results(system=system, solver=solver_name(solver), dt=float(h), wall_time_s=wall,
                    compile_time_s=compile_s, status=REASONS[status], failure_time=t_fail,
                    message=message, info=dict(steps=int((n_rows - 1) * sub), substeps_per_output=sub),
@@ -445,7 +464,9 @@ def _simulate_diffrax(system, state, solver, t0, n_int, out_dt, dt, per_chunk, n
     REASONS.setdefault(99, "solver")
     message = ""
     if status != OK:
-        message = (_failure_message(status, t_fail, system, options) if status != 99 else
+        message = (_failure_message(status, t_fail, system, options,
+                                    last=(cat["q"][-1], cat["v"][-1], float(cat["t"][-1])))
+                   if status != 99 else
                    f"simulation stopped at t = {t_fail:.6g} s: the adaptive solver failed "
                    f"(step size underflow, max_steps = {solver.max_steps} reached, or NaN)")
     res = Results(system=system, solver=name, dt=float(dt), wall_time_s=wall, compile_time_s=compile_s,
