@@ -174,32 +174,46 @@ def _crossing(system, integrator, carry, new, h, context, options):
     return out, (iters, conv), jnp.any(crossed)
 
 
-def _retry_in_substeps(system, integrator, carry, h, context, options, need):
-    """Redo a failed step of size h as a sequence of smaller steps (see RunOptions),
-    where ``need`` is set (a while loop: under vmap only members that need it work).
+def _step_with_retries(system, integrator, carry, h, context, options):
+    """One step of size h, redone as a sequence of smaller steps if it fails (Newton
+    not converged, NaN): the step is halved after a failure and doubled again (up to
+    h) after a success, down to h / 2^max_halvings (see RunOptions).
 
-    Returns (carry, iterations, converged)."""
+    One while loop holds the only copy of the integrator's step in the compiled
+    program (a separate first attempt would double the compile time); under vmap only
+    the members that need more substeps keep working. If the step cannot be completed,
+    the outcome of the first attempt (size h) is returned, so the failure status names
+    the first cause. Not reverse-differentiable (a while loop): ``trajectory`` runs with
+    ``max_halvings = 0``.
+
+    Returns (carry, StepInfo).
+    """
     h_min = h / 2.0**options.max_halvings
 
     def cond(st):
-        c, done, h_try, _, ok = st
+        _, _, done, _, _, ok, _ = st
         return ok & (done < h * (1.0 - 1e-12))
 
     def body(st):
-        c, done, h_try, iters, _ = st
+        c, first, done, h_try, iters, _, attempt = st
         dt = jnp.minimum(h_try, h - done)
         new, info = integrator.step(system, c, dt, context)
         good = (info.converged & jnp.all(jnp.isfinite(new.q)) & jnp.all(jnp.isfinite(new.v))
                 & jnp.all(jnp.isfinite(new.lam)))
+        first = jax.tree.map(lambda a, b: jnp.where(attempt == 0, a, b), new, first)
         c = jax.tree.map(lambda a, b: jnp.where(good, a, b), new, c)
         done = jnp.where(good, done + dt, done)
         h_next = jnp.where(good, jnp.minimum(2.0 * h_try, h), 0.5 * h_try)
         ok = good | (0.5 * h_try >= h_min * (1.0 - 1e-12))
-        return c, done, h_next, iters + info.iterations, ok
+        return c, first, done, h_next, iters + info.iterations, ok, attempt + 1
 
-    c, done, _, iters, ok = jax.lax.while_loop(
-        cond, body, (carry, jnp.where(need, 0.0, h), 0.5 * h, jnp.zeros((), jnp.int32), need))
-    return c, iters, done >= h * (1.0 - 1e-12)
+    zero = jnp.zeros((), jnp.asarray(h).dtype)
+    c, first, done, _, iters, _, _ = jax.lax.while_loop(
+        cond, body, (carry, carry, zero, h + zero, jnp.zeros((), jnp.int32), jnp.ones((), bool),
+                     jnp.zeros((), jnp.int32)))
+    completed = done >= h * (1.0 - 1e-12)
+    out = jax.tree.map(lambda a, b: jnp.where(completed, a, b), c, first)
+    return out, StepInfo(iters, completed)
 
 
 def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopState, context,
@@ -216,14 +230,10 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
         loop, iters, maxit, ncross = c
 
         def advance():
-            new, info = integrator.step(system, loop.carry, h, context)
             if options.max_halvings:
-                fine = (info.converged & jnp.all(jnp.isfinite(new.q)) & jnp.all(jnp.isfinite(new.v)))
-                c, it, conv = _retry_in_substeps(system, integrator, loop.carry, h, context, options, ~fine)
-                # a step that fails even in the finest substeps keeps its original
-                # outcome, so the status names the first cause (NaN or Newton)
-                new = jax.tree.map(lambda a, b: jnp.where(fine | ~conv, a, b), new, c)
-                info = StepInfo(info.iterations + it, fine | conv)
+                new, info = _step_with_retries(system, integrator, loop.carry, h, context, options)
+            else:
+                new, info = integrator.step(system, loop.carry, h, context)
             new2, extra, crossed = _crossing(system, integrator, loop.carry, new, h, context, options)
             it = info.iterations
             conv = info.converged
