@@ -41,9 +41,38 @@ def _violations(system: System, q, v, t):
     return jax.vmap(one)(q, v, t)
 
 
+# jitted histories over the output rows; numeric parameters are traced (no recompiling
+# per query), names and measures are static
 @eqx.filter_jit
-def _beam_map(system: System, beam: int, q, fn):
-    return jax.vmap(lambda qq: fn(system.beams[beam], system.beam_nodes(qq, beam)))(q)
+def _point_history(system: System, beam: int, q, s):
+    """Positions at arc lengths s (one per row, shape (N,))."""
+    return jax.vmap(lambda qq, ss: system.beams[beam].position(system.beam_nodes(qq, beam), ss))(q, s)
+
+
+@eqx.filter_jit
+def _slope_history(system: System, beam: int, q, s):
+    return jax.vmap(lambda qq, ss: system.beams[beam].slope(system.beam_nodes(qq, beam), ss))(q, s)
+
+
+@eqx.filter_jit
+def _stress_history(system: System, beam: int, q, s, y, measure: str):
+    return jax.vmap(lambda qq: system.beams[beam].stress(system.beam_nodes(qq, beam), s, y, measure))(q)
+
+
+@eqx.filter_jit
+def _element_stress_history(system: System, beam: int, q, element, xi, y, measure: str):
+    return jax.vmap(lambda qq: system.beams[beam].element_stress(
+        system.beam_nodes(qq, beam), element, xi, y, measure))(q)
+
+
+@eqx.filter_jit
+def _stress_along_history(system: System, beam: int, q, points: int, y, measure: str):
+    return jax.vmap(lambda qq: system.beams[beam].stress_along(
+        system.beam_nodes(qq, beam), points, y, measure)[1])(q)
+
+
+def _f(x):
+    return None if x is None else jnp.asarray(x, float)
 
 
 @dataclasses.dataclass
@@ -111,8 +140,8 @@ class Results:
     def point(self, beam: str, s: float) -> np.ndarray:
         """Position history of the material point at arc length s [m], shape (N, 2)."""
         b = self._index(self.system.beam_names, beam, "beam")
-        return np.asarray(_beam_map(self.system, b, jnp.asarray(self.q),
-                                    lambda bm, nodes: bm.position(nodes, s)))
+        return np.asarray(_point_history(self.system, b, jnp.asarray(self.q),
+                                         jnp.full(len(self.t), float(s))))
 
     def sliding(self, name: str) -> np.ndarray:
         """History of a sliding coordinate [m], shape (N,)."""
@@ -127,8 +156,7 @@ class Results:
             raise ModelError(f"no sliding joint named {name!r}")
         b, j = joint.beam, joint.sliding
         s = self.q[:, self.system.sliding_offset + j]
-        return np.asarray(jax.vmap(lambda qq, ss: self.system.beams[b].position(
-            self.system.beam_nodes(qq, b), ss))(jnp.asarray(self.q), jnp.asarray(s)))
+        return np.asarray(_point_history(self.system, b, jnp.asarray(self.q), jnp.asarray(s)))
 
     def multipliers(self, joint: str) -> np.ndarray:
         """Lagrange multipliers of one joint, shape (N, size)."""
@@ -153,8 +181,7 @@ class Results:
         force = self.multipliers(name)  # force on the body is +λ
         b, j = joint.beam, joint.sliding
         s = self.q[:, self.system.sliding_offset + j]
-        tangent = np.asarray(jax.vmap(lambda qq, ss: self.system.beams[b].slope(
-            self.system.beam_nodes(qq, b), ss))(jnp.asarray(self.q), jnp.asarray(s)))
+        tangent = np.asarray(_slope_history(self.system, b, jnp.asarray(self.q), jnp.asarray(s)))
         tangent = tangent / np.linalg.norm(tangent, axis=1, keepdims=True)
         normal = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
         return np.stack([np.sum(force * normal, axis=1), np.sum(force * tangent, axis=1)], axis=1)
@@ -163,22 +190,21 @@ class Results:
     def stress(self, beam: str, s: float, y: float | None = None, measure: str = "exact") -> np.ndarray:
         """Bending stress history [Pa] at arc length s on fibre y (Eq. 18), shape (N,)."""
         b = self._index(self.system.beam_names, beam, "beam")
-        return np.asarray(_beam_map(self.system, b, jnp.asarray(self.q),
-                                    lambda bm, nodes: bm.stress(nodes, s, y, measure)))
+        return np.asarray(_stress_history(self.system, b, jnp.asarray(self.q), _f(s), _f(y), measure))
 
     def element_stress(self, beam: str, element: int, xi: float, y: float | None = None,
                        measure: str = "exact") -> np.ndarray:
         """Stress history [Pa] in element ``element`` (0-based) at ξ = x/l, shape (N,)."""
         b = self._index(self.system.beam_names, beam, "beam")
-        return np.asarray(_beam_map(self.system, b, jnp.asarray(self.q),
-                                    lambda bm, nodes: bm.element_stress(nodes, element, xi, y, measure)))
+        return np.asarray(_element_stress_history(self.system, b, jnp.asarray(self.q),
+                                                  jnp.asarray(element), _f(xi), _f(y), measure))
 
     def stress_along(self, beam: str, points_per_element: int = 11, y: float | None = None,
                      measure: str = "exact") -> tuple[np.ndarray, np.ndarray]:
         """Stress along a beam over time: (s (E, P), sigma (N, E, P)) [m, Pa]; NaN on padding."""
         b = self._index(self.system.beam_names, beam, "beam")
-        sig = np.asarray(_beam_map(self.system, b, jnp.asarray(self.q),
-                                   lambda bm, nodes: bm.stress_along(nodes, points_per_element, y, measure)[1]))
+        sig = np.asarray(_stress_along_history(self.system, b, jnp.asarray(self.q), points_per_element,
+                                               _f(y), measure))
         s, _ = self.system.beams[b].stress_along(self.system.beams[b].mesh.reference_nodes,
                                                  points_per_element, y, measure)
         return np.asarray(s), sig

@@ -85,6 +85,23 @@ def _chunking(n_intervals: int, substeps: int, chunks: int | None) -> tuple[int,
     return per, int(math.ceil(n_intervals / per))
 
 
+def _prepare(t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings,
+             on_failure, chunks, solver_options):
+    """Check the run arguments (before anything is compiled) and derive the solver
+    instance, RunOptions, time grid and chunking."""
+    if on_failure not in ("raise", "return"):
+        raise ModelError(f"on_failure must be 'raise' or 'return', got {on_failure!r}")
+    check_positive("drift_tolerance", drift_tolerance, "m")
+    grid = time_grid(t_end, dt, output_dt)
+    if isinstance(solver, str):
+        solver = make_solver(solver, **(solver_options or {}))
+    elif solver_options:
+        raise ModelError("solver_options apply to solvers given by name")
+    options = RunOptions(drift_tolerance=drift_tolerance, locate_crossings=locate_crossings,
+                         max_halvings=_halvings(max_halvings))
+    return solver, options, grid, _chunking(grid[0], grid[1], chunks)
+
+
 def _halvings(value) -> int:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 <= value <= 30:
         raise ModelError(f"max_halvings must be an integer in 0..30, got {value!r}")
@@ -182,17 +199,9 @@ def simulate(system: System, state: State, *, t_end: float, dt: float | None = N
             sliding joint leaving its beam); ``err.results`` holds the results so far.
     """
     dt = 1e-3 if dt is None else dt
-    if on_failure not in ("raise", "return"):
-        raise ModelError(f"on_failure must be 'raise' or 'return', got {on_failure!r}")
-    check_positive("drift_tolerance", drift_tolerance, "m")
-    n_int, sub, h, out_dt = time_grid(t_end, dt, output_dt)
-    if isinstance(solver, str):
-        solver = make_solver(solver, **(solver_options or {}))
-    elif solver_options:
-        raise ModelError("solver_options apply to solvers given by name")
-    options = RunOptions(drift_tolerance=drift_tolerance, locate_crossings=locate_crossings,
-                         max_halvings=_halvings(max_halvings))
-    per_chunk, n_chunks = _chunking(n_int, sub, chunks)
+    solver, options, (n_int, sub, h, out_dt), (per_chunk, n_chunks) = _prepare(
+        t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings, on_failure,
+        chunks, solver_options)
     t0 = float(state.t)
     if isinstance(solver, DiffraxSolver):
         return _simulate_diffrax(system, state, solver, t0, n_int, out_dt, dt, per_chunk, n_chunks,
@@ -349,17 +358,11 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
         raise ModelError("simulate_batch needs systems of identical structure and shapes: build them "
                          "from the same model with the same pad_to")
     dt = 1e-3 if dt is None else dt
-    if on_failure not in ("raise", "return"):
-        raise ModelError(f"on_failure must be 'raise' or 'return', got {on_failure!r}")
-    check_positive("drift_tolerance", drift_tolerance, "m")
-    n_int, sub, h, _ = time_grid(t_end, dt, output_dt)
-    if isinstance(solver, str):
-        solver = make_solver(solver, **(solver_options or {}))
+    solver, options, (n_int, sub, h, _), (per_chunk, n_chunks) = _prepare(
+        t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings, on_failure,
+        chunks, solver_options)
     if isinstance(solver, DiffraxSolver):
         raise ModelError("simulate_batch runs fixed-step solvers (generalized-alpha, rk4)")
-    options = RunOptions(drift_tolerance=drift_tolerance, locate_crossings=locate_crossings,
-                         max_halvings=_halvings(max_halvings))
-    per_chunk, n_chunks = _chunking(n_int, sub, chunks)
     t0s = {float(s.t) for s in states}
     if len(t0s) != 1:
         raise ModelError("simulate_batch needs a common start time")

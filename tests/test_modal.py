@@ -3,38 +3,19 @@ Euler–Bernoulli characteristic equation."""
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq
 
 from ancf_jax import mesh
 from ancf_jax.model import Model, node
 from ancf_jax.modal import modal_analysis
 from ancf_jax.section import Section
 
+from .beam_theory import clamped_free_frequencies
+
 L, EI, RHO_A, EA = 1.0, 1.0, 1.0, 1e7
 
 
 def characteristic_frequencies(tip_mass, tip_inertia, count=4):
-    """Roots ω of the clamped-free beam with a tip mass M and rotary inertia J at x = L.
-
-    w = A(cos βx − cosh βx) + B(sin βx − sinh βx), β⁴ = ρA ω²/EI; the natural boundary
-    conditions at L are EI w'' = J ω² w' and EI w''' = −M ω² w.
-    """
-    def det(beta):
-        w2 = beta**4 * EI / RHO_A
-        c, s, ch, sh = np.cos(beta * L), np.sin(beta * L), np.cosh(beta * L), np.sinh(beta * L)
-        # columns: A, B; rows: moment and shear conditions
-        wa, wb = c - ch, s - sh
-        d1a, d1b = beta * (-s - sh), beta * (c - ch)
-        d2a, d2b = beta**2 * (-c - ch), beta**2 * (-s - sh)
-        d3a, d3b = beta**3 * (s - sh), beta**3 * (-c - ch)
-        m = np.array([[EI * d2a - tip_inertia * w2 * d1a, EI * d2b - tip_inertia * w2 * d1b],
-                      [EI * d3a + tip_mass * w2 * wa, EI * d3b + tip_mass * w2 * wb]])
-        return np.linalg.det(m) / (ch * ch)
-    betas = np.linspace(0.05, 15.0, 6000)
-    vals = [det(b) for b in betas]
-    roots = [brentq(det, betas[i], betas[i + 1], xtol=1e-14)
-             for i in range(len(betas) - 1) if vals[i] * vals[i + 1] < 0]
-    return np.array([b**2 * np.sqrt(EI / RHO_A) for b in roots[:count]])
+    return clamped_free_frequencies(EI, RHO_A, L, tip_mass, tip_inertia, count)
 
 
 def test_characteristic_equation_bare_limit():

@@ -12,6 +12,8 @@ from ancf_jax.models.m1 import M1, m1_model
 from ancf_jax.simulation import simulate, simulate_batch
 from ancf_jax.statics import solve_static
 
+from ..beam_theory import clamped_free_frequencies
+
 L = M1["length"]
 EA = M1["youngs_modulus"] * M1["area"]
 EI = M1["youngs_modulus"] * M1["second_moment"]
@@ -70,26 +72,9 @@ def test_static_equilibrium_matches_heavy_elastica(statics):
 
 
 def characteristic_frequencies(count=4):
-    """Clamped-free Euler–Bernoulli beam with M1's tip mass and rotary inertia."""
-    rho_a = M1["beam_mass"] / L
-    m, j = M1["tip_mass"], M1["tip_inertia"]
-
-    def det(beta):
-        w2 = beta**4 * EI / rho_a
-        c, s, ch, sh = np.cos(beta * L), np.sin(beta * L), np.cosh(beta * L), np.sinh(beta * L)
-        wa, wb = c - ch, s - sh
-        d1a, d1b = beta * (-s - sh), beta * (c - ch)
-        d2a, d2b = beta**2 * (-c - ch), beta**2 * (-s - sh)
-        d3a, d3b = beta**3 * (s - sh), beta**3 * (-c - ch)
-        mat = np.array([[EI * d2a - j * w2 * d1a, EI * d2b - j * w2 * d1b],
-                        [EI * d3a + m * w2 * wa, EI * d3b + m * w2 * wb]])
-        return np.linalg.det(mat) / (ch * ch)
-
-    betas = np.linspace(0.1, 40.0, 8000)
-    vals = [det(b) for b in betas]
-    roots = [brentq(det, betas[i], betas[i + 1], xtol=1e-14)
-             for i in range(len(betas) - 1) if vals[i] * vals[i + 1] < 0]
-    return np.array([b**2 * np.sqrt(EI / rho_a) for b in roots[:count]]) / (2 * np.pi)
+    """Clamped-free Euler–Bernoulli beam with M1's tip mass and rotary inertia [Hz]."""
+    return clamped_free_frequencies(EI, M1["beam_mass"] / L, L, M1["tip_mass"], M1["tip_inertia"],
+                                    count) / (2 * np.pi)
 
 
 def test_frequencies_with_tip_body_match_characteristic_equation():

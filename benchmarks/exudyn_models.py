@@ -1,0 +1,810 @@
+"""The reference models M1, M2 and H1 built in Exudyn, from the ancf_jax models.
+
+One parameter source: every Exudyn model here is *translated* from an assembled ancf_jax
+:class:`~ancf_jax.system.System` and its initial :class:`~ancf_jax.system.State`
+(:func:`build_exudyn`), so lengths, sections, masses, damping, gravity, joint locations
+and the initial state are the numbers ancf_jax simulates; nothing is retyped. The
+ancf_jax systems come from the model builders (:func:`ancf_jax.models.m1_model`,
+:func:`ancf_jax.models.m2.m2_initial`, :func:`h1_model` below) with the formulation
+that matches Exudyn's cable element (:func:`exudyn_formulation`).
+
+Mapping (ancf_jax → Exudyn 1.13):
+
+==============================  ===========================================================
+beam node (r, r')               ``NodePoint2DSlope1`` (reference = ancf_jax stress-free
+                                mesh, initial displacement = q₀ − reference)
+beam element                    ``ObjectANCFCable2D`` (length, ρA, EA = E·A, EI = E·I,
+                                ``useReducedOrderIntegration`` from the quadrature rules)
+Rayleigh α (β = 0)              ``ObjectGenericODE2`` over the beam's nodes with
+                                ``dampingMatrix`` = α·M, M = Exudyn's own consistent mass
+                                matrix of those coordinates (zero mass/stiffness matrices)
+gravity                         ``LoadMassProportional`` on ``MarkerBodyMass`` of every
+                                element and body
+rigid body (x, y, θ)            ``NodeRigidBody2D`` + ``ObjectRigidBody2D``
+Clamp (full), pin of a node     ``ObjectConnectorCoordinate`` per fixed nodal coordinate,
+                                to a ground coordinate, offset = prescribed − reference
+revolute (body/node points)     ``ObjectJointRevolute2D`` between position markers
+fixed joint node ↔ body         ``ObjectJointGeneric``, constrained axes x, y, rot z,
+                                between ``MarkerNodeRigid`` (slope frame of the node) and
+                                ``MarkerBodyRigid`` (body frame turned by the body-frame
+                                direction u₀ of the ancf_jax joint)
+sliding joint                   ``ObjectJointSliding2D`` (classical formulation) over all
+                                elements (``MarkerBodyCable2DCoordinates``), data node
+                                [element index, s₀]
+==============================  ===========================================================
+
+Exudyn's cable uses the axial strain |r'| − 1 and the material curvature
+(r' × r'')/|r'|², with Gauss rules chosen by ``useReducedOrderIntegration``
+(:data:`EXUDYN_RULES`, measured against Exudyn's residual in the tests). The ancf_jax
+side of any comparison must use :func:`exudyn_formulation` with the same mode.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from typing import Any
+
+import numpy as np
+
+import ancf_jax  # noqa: F401  (float64)
+from ancf_jax import joints as J
+from ancf_jax import mesh as _mesh
+from ancf_jax import points as P
+from ancf_jax.element.quadrature import rule as _rule
+from ancf_jax.element.strain_energy import Formulation
+from ancf_jax.errors import ModelError
+from ancf_jax.model import Model, node
+from ancf_jax.section import Section
+from ancf_jax.simulation import time_grid
+
+try:  # optional dependency (the ``bench`` extra)
+    import exudyn as exu
+    from exudyn import itemInterface as eii
+except ImportError:  # pragma: no cover - exercised where exudyn is missing
+    exu = None
+    eii = None
+
+MODELS = ("M1", "M2", "H1")
+
+#: Gauss rules of Exudyn's ObjectANCFCable2D per ``useReducedOrderIntegration`` mode:
+#: (axial rule, bending rule) as ancf_jax (kind, points). Determined by matching
+#: Exudyn 1.13.6's elastic force of a randomly deformed element to 1e-15 (relative)
+#: (``tests/test_exudyn_crosscheck.py::test_exudyn_quadrature_rules``); the source
+#: comments call them "A9-B5", "A7-B3" and "A4-B3" (polynomial orders).
+EXUDYN_RULES = {
+    0: (("gauss", 5), ("gauss", 3)),    # Exudyn default
+    1: (("gauss", 4), ("gauss", 2)),
+    2: (("lobatto", 3), ("gauss", 2)),
+}
+
+#: H1, the very flexible pendulum (MODELS.md), SI. No ancf_jax builder exists yet, so
+#: the parameters live here (the lead may move them to ``ancf_jax.models``).
+H1 = dict(length=1.2, n_elements=8, area=0.0018, second_moment=1.215e-8, density=5540.0,
+          youngs_modulus=0.7e6, gravity=9.81)
+
+
+def require_exudyn():
+    """Raise ImportError with a helpful message when Exudyn is not installed."""
+    if exu is None:
+        raise ImportError("exudyn is not installed (pip install 'ancf_jax[bench]' or "
+                          "pip install exudyn)")
+
+
+# ------------------------------------------------------------------ ancf_jax side
+def exudyn_formulation(integration: int = 0) -> Formulation:
+    """The ancf_jax formulation equal to Exudyn's ANCFCable2D with
+    ``useReducedOrderIntegration=integration``: |r'| − 1, material curvature and
+    Exudyn's Gauss rules (:data:`EXUDYN_RULES`)."""
+    if integration not in EXUDYN_RULES:
+        raise ModelError(f"integration must be one of {sorted(EXUDYN_RULES)}, got {integration!r}")
+    ax, be = EXUDYN_RULES[integration]
+    return Formulation(axial_strain="engineering", curvature="material",
+                       axial_quadrature=ax, bending_quadrature=be)
+
+
+def integration_mode(formulation: Formulation) -> int:
+    """Exudyn's ``useReducedOrderIntegration`` equal to an ancf_jax formulation.
+
+    Raises:
+        ModelError: the formulation has no Exudyn equivalent.
+    """
+    if formulation.axial_strain != "engineering" or formulation.curvature != "material":
+        raise ModelError("Exudyn's ANCFCable2D uses axial_strain='engineering' and "
+                         f"curvature='material'; got {formulation.axial_strain!r}, "
+                         f"{formulation.curvature!r} (use exudyn_formulation())")
+    for mode, (ax, be) in EXUDYN_RULES.items():
+        if tuple(formulation.axial_quadrature) == ax and tuple(formulation.bending_quadrature) == be:
+            return mode
+    raise ModelError(f"quadrature {formulation.axial_quadrature}/{formulation.bending_quadrature} "
+                     f"is none of Exudyn's rules {EXUDYN_RULES}")
+
+
+def h1_model(n_elements: int | None = None, *, formulation: Formulation | None = None,
+             **overrides) -> Model:
+    """H1: a straight beam pinned at the origin, released from rest under gravity
+    (no damping); parameters :data:`H1`."""
+    unknown = set(overrides) - set(H1)
+    if unknown:
+        raise ModelError(f"unknown H1 parameter(s) {sorted(unknown)}; known: {sorted(H1)}")
+    p = {**H1, **overrides}
+    if n_elements is not None:
+        p["n_elements"] = n_elements
+    m = Model(gravity=(0.0, -p["gravity"]))
+    section = Section(p["youngs_modulus"], p["area"], p["second_moment"], p["density"] * p["area"])
+    m.add_beam("beam", _mesh.straight((0.0, 0.0), (1.0, 0.0), p["length"], p["n_elements"]),
+               section, formulation=formulation)
+    m.pin("pin", node("beam", 0))
+    return m
+
+
+def ancf_system(model: str, n_elements: int, *, integration: int = 0, **overrides):
+    """(system, initial state) of an ancf_jax reference model with Exudyn's formulation.
+
+    ``model`` is "M1", "M2" (released at the static equilibrium with the trolley held at
+    s₀, from :func:`ancf_jax.models.m2.m2_initial`; this solve takes ~20 s) or "H1".
+    """
+    form = exudyn_formulation(integration)
+    if model == "M1":
+        from ancf_jax.models.m1 import m1_model
+        return m1_model(n_elements, formulation=form, **overrides).build()
+    if model == "M2":
+        from ancf_jax.models.m2 import m2_initial
+        system, state, _ = m2_initial(n_elements, formulation=form, **overrides)
+        return system, state
+    if model == "H1":
+        return h1_model(n_elements, formulation=form, **overrides).build()
+    raise ModelError(f"model must be one of {MODELS}, got {model!r}")
+
+
+# ------------------------------------------------------------------ Exudyn side
+@dataclasses.dataclass
+class ExudynModel:
+    """An Exudyn system translated from an ancf_jax system (see module docstring).
+
+    Attributes:
+        name: model name ("M1", "M2", "H1" or free text).
+        system: the ancf_jax system it was translated from (for post-processing).
+        sc, mbs: Exudyn SystemContainer and MainSystem (assembled).
+        beam_nodes: Exudyn node numbers of every beam's nodes.
+        beam_elements: Exudyn object numbers of every beam's elements.
+        beam_reference: reference nodal coordinates of every beam, (n + 1, 4).
+        body_nodes, body_objects: Exudyn node/object numbers of the rigid bodies.
+        body_reference: reference poses (nb, 3).
+        sliders: Exudyn object numbers of the sliding joints (ancf_jax order).
+        sensors: sensor numbers by kind.
+        integration: ``useReducedOrderIntegration`` of every cable element.
+        setup_time_s: wall time of the translation, Assemble and mass matrix.
+    """
+
+    name: str
+    system: Any
+    sc: Any
+    mbs: Any
+    beam_nodes: list
+    beam_elements: list
+    beam_reference: list
+    body_nodes: list
+    body_objects: list
+    body_reference: np.ndarray
+    sliders: list
+    sensors: dict
+    integration: list
+    setup_time_s: float = 0.0
+    used: bool = False
+
+
+def _straight_unit_reference(ref: np.ndarray, n: int, name: str) -> None:
+    """Exudyn's cable measures strain from a straight, unit-slope state; check that the
+    ancf_jax stress-free reference is such a state (else the energies differ)."""
+    t = ref[: n + 1, 2:]
+    if np.max(np.abs(np.linalg.norm(t, axis=1) - 1.0)) > 1e-12 or np.max(np.abs(t - t[0])) > 1e-12:
+        raise ModelError(f"beam {name!r}: Exudyn's ANCFCable2D needs a straight reference with "
+                         "unit slopes (strain is measured from |r'| = 1, curvature 0)")
+    d = ref[1: n + 1, :2] - ref[:n, :2]
+    if np.max(np.abs(d[:, 0] * t[0, 1] - d[:, 1] * t[0, 0])) > 1e-12:
+        raise ModelError(f"beam {name!r}: reference nodes are not on a straight line")
+
+
+def _mass_matrix(mbs) -> np.ndarray:
+    """Exudyn's own system mass matrix (ODE2 coordinates), computed without a run."""
+    ss = exu.SimulationSettings()
+    ss.staticSolver.verboseMode = 0
+    ss.solution.file.write = False
+    ss.solution.sensors.active = False
+    solver = exu.MainSolverStatic()
+    solver.InitializeSolver(mbs, ss)
+    solver.ComputeMassMatrix(mbs)
+    return np.array(solver.GetSystemMassMatrix())
+
+
+def sliding_term(ds: float, slope_shape: np.ndarray, force) -> np.ndarray:
+    """The extra generalized force in Exudyn 1.13's ``ObjectJointSliding2D``
+    (classical formulation), on the 8 coordinates of the current cable element.
+
+    Exudyn adds C_qᵀ z to the equations of motion for *all* algebraic coordinates z of
+    a constraint (``CSystem::ComputeODE2ProjectedReactionForces``). The sliding joint's
+    third algebraic coordinate is not a multiplier but the sliding increment Δs of the
+    step, and its equation row is λ·r'(s) = 0, whose ODE2 Jacobian is λᵀS'(s). So the
+    cable equations carry the extra term Δs S'(s)ᵀλ on their left-hand side (Δs the
+    increment since the start of the step, λ the joint force). It vanishes at rest and
+    is O(h) in the step: a first-order error of Exudyn's joint, not of the model.
+
+    Args:
+        ds: sliding increment Δs [m]; slope_shape: S'(s) (4,) in Exudyn's order;
+        force: (λx, λy) [N].
+    Returns:
+        (8,) term on [r0x, r0y, r0'x, r0'y, r1x, r1y, r1'x, r1'y].
+    """
+    out = np.zeros(8)
+    out[0::2] = ds * slope_shape * force[0]
+    out[1::2] = ds * slope_shape * force[1]
+    return out
+
+
+def _sliding_compensation(joints, lengths, size):
+    """forceUserFunction of an ObjectGenericODE2 over all nodes of a beam: +Δs S'ᵀλ on
+    the right-hand side for each sliding joint, cancelling :func:`sliding_term`."""
+    cache = {}
+
+    def force(mbs, t, item, q, q_t):
+        sd = mbs.systemData
+        if not cache:
+            for j in joints:
+                data_node = mbs.GetObjectParameter(j, "nodeNumber")
+                cache[j] = (np.asarray(sd.GetObjectLTGAE(j), int), np.asarray(sd.GetNodeLTGData(data_node), int),
+                            np.asarray(mbs.GetObjectParameter(j, "slidingMarkerOffsets"), float))
+        z = sd.GetAECoordinates()
+        x = sd.GetDataCoordinates()
+        f = np.zeros(size)
+        for j in joints:
+            ae, data, offsets = cache[j]
+            k = int(round(x[data[0]]))
+            ds = z[ae[2]]
+            s_el = ds + x[data[1]] - offsets[k]
+            _, s1, _ = _hermite(np.array([s_el / lengths[k]]), lengths[k])
+            f[4 * k: 4 * k + 8] += sliding_term(ds, s1[0], (z[ae[0]], z[ae[1]]))
+        return f
+
+    return force
+
+
+def _rotation_angle(v) -> float:
+    return math.atan2(float(v[1]), float(v[0]))
+
+
+def build_exudyn(system, state, *, name: str = "", integration: int | None = None,
+                 cancel_sliding_term: bool = False) -> ExudynModel:
+    """Translate an assembled ancf_jax system and its initial state into Exudyn.
+
+    Supports what M1, M2 and H1 use: beams with straight unit-slope references,
+    Rayleigh α (β = 0), rigid bodies, gravity, ``Clamp`` (mode "full"), ``Coincident``
+    (ground–node, ground–body, body–body, node–body), ``FixedJoint`` (beam node–body)
+    and ``SlidingJoint``. Anything else raises :class:`NotImplementedError`.
+
+    Args:
+        integration: override the cable's ``useReducedOrderIntegration`` (default: the
+            mode equal to each beam's formulation; a formulation without an Exudyn
+            equivalent raises :class:`ModelError`).
+        cancel_sliding_term: add, per sliding joint, a generalized force that cancels
+            the extra term Exudyn 1.13's ``ObjectJointSliding2D`` puts into the cable
+            equations (see :func:`sliding_term`); only for cross-checks (it is a Python
+            user function called at every residual evaluation).
+    """
+    require_exudyn()
+    t_start = time.perf_counter()
+    if system.forces:
+        raise NotImplementedError("force elements are not translated to Exudyn")
+    q0 = np.asarray(state.q, float)
+    v0 = np.asarray(state.v, float)
+    g = np.asarray(system.gravity, float)
+    sc = exu.SystemContainer()
+    mbs = sc.AddSystem()
+    ground_node = mbs.AddNode(eii.NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
+    ground_coord = mbs.AddMarker(eii.MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0))
+    ground_obj = mbs.AddObject(eii.ObjectGround(referencePosition=[0.0, 0.0, 0.0]))
+    gravity = [float(g[0]), float(g[1]), 0.0]
+
+    # ---- beams
+    beam_nodes, beam_elements, beam_reference, modes = [], [], [], []
+    for b, beam in enumerate(system.beams):
+        bname = system.beam_names[b] if system.beam_names else str(b)
+        n = int(beam.mesh.n_elements)
+        if n != beam.mesh.n_max:
+            raise NotImplementedError("padded beams are not translated to Exudyn")
+        if float(beam.beta) != 0.0:
+            raise NotImplementedError("stiffness-proportional damping (beta) is not translated")
+        mode = integration_mode(beam.formulation) if integration is None else int(integration)
+        ref = np.asarray(beam.mesh.reference_nodes, float)
+        _straight_unit_reference(ref, n, bname)
+        x0 = np.asarray(system.beam_nodes(q0, b), float)
+        xv = np.asarray(system.beam_nodes(v0, b), float)
+        sec = beam.section
+        ea = float(sec.youngs_modulus) * float(sec.area)
+        ei = float(sec.youngs_modulus) * float(sec.second_moment)
+        rho_a = float(sec.mass_per_length)
+        lengths = np.asarray(beam.mesh.element_lengths, float)
+        nodes = [mbs.AddNode(eii.NodePoint2DSlope1(referenceCoordinates=list(ref[i]),
+                                                   initialCoordinates=list(x0[i] - ref[i]),
+                                                   initialVelocities=list(xv[i])))
+                 for i in range(n + 1)]
+        elements = []
+        for i in range(n):
+            e = mbs.AddObject(eii.ObjectANCFCable2D(
+                nodeNumbers=[nodes[i], nodes[i + 1]], length=float(lengths[i]), massPerLength=rho_a,
+                axialStiffness=ea, bendingStiffness=ei, useReducedOrderIntegration=mode))
+            mbs.AddLoad(eii.LoadMassProportional(
+                markerNumber=mbs.AddMarker(eii.MarkerBodyMass(bodyNumber=e)), loadVector=gravity))
+            elements.append(e)
+        beam_nodes.append(nodes)
+        beam_elements.append(elements)
+        beam_reference.append(ref)
+        modes.append(mode)
+
+    # ---- rigid bodies
+    body_nodes, body_objects = [], []
+    poses = np.array([np.asarray(system.body_pose(q0, k)) for k in range(system.n_bodies)]).reshape(-1, 3)
+    vels = np.array([np.asarray(system.body_pose(v0, k)) for k in range(system.n_bodies)]).reshape(-1, 3)
+    for k in range(system.n_bodies):
+        nd = mbs.AddNode(eii.NodeRigidBody2D(referenceCoordinates=list(poses[k]),
+                                             initialVelocities=list(vels[k])))
+        ob = mbs.AddObject(eii.ObjectRigidBody2D(mass=float(system.bodies.mass[k]),
+                                                 inertia=float(system.bodies.inertia[k]), nodeNumber=nd))
+        mbs.AddLoad(eii.LoadMassProportional(
+            markerNumber=mbs.AddMarker(eii.MarkerBodyMass(bodyNumber=ob)), loadVector=gravity))
+        body_nodes.append(nd)
+        body_objects.append(ob)
+
+    # ---- joints
+    def fix_coordinate(b, i, c, value):
+        """Nodal coordinate c of node i of beam b held at ``value`` (total coordinate)."""
+        m = mbs.AddMarker(eii.MarkerNodeCoordinate(nodeNumber=beam_nodes[b][i], coordinate=c))
+        mbs.AddObject(eii.ObjectConnectorCoordinate(
+            markerNumbers=[ground_coord, m], offset=float(value - beam_reference[b][i, c])))
+
+    def node_index(pt):
+        n = int(system.beams[pt.beam].mesh.n_elements)
+        i = int(np.asarray(pt.node))
+        return i if i >= 0 else n + 1 + i
+
+    def position_marker(pt):
+        if isinstance(pt, P.BodyPoint):
+            return mbs.AddMarker(eii.MarkerBodyPosition(
+                bodyNumber=body_objects[pt.body], localPosition=[*map(float, np.asarray(pt.local)), 0.0]))
+        if isinstance(pt, P.BeamNode):
+            return mbs.AddMarker(eii.MarkerNodePosition(nodeNumber=beam_nodes[pt.beam][node_index(pt)]))
+        if isinstance(pt, P.GroundPoint):
+            loc = np.asarray(pt.location, float)
+            return mbs.AddMarker(eii.MarkerBodyPosition(bodyNumber=ground_obj,
+                                                        localPosition=[loc[0], loc[1], 0.0]))
+        raise NotImplementedError(f"point type {type(pt).__name__} is not translated to Exudyn")
+
+    sliders = []
+    for c in system.constraints:
+        if isinstance(c, J.Clamp):
+            if c.mode != "full":
+                raise NotImplementedError("clamp mode 'direction' is not translated to Exudyn")
+            b, i = c.node.beam, node_index(c.node)
+            target = np.concatenate([np.asarray(c.location, float), np.asarray(c.slope, float)])
+            for k in range(4):
+                fix_coordinate(b, i, k, target[k])
+        elif isinstance(c, J.Coincident):
+            a, bb = c.a, c.b
+            if isinstance(bb, P.GroundPoint) and isinstance(a, P.BeamNode):
+                a, bb = bb, a
+            if isinstance(a, P.GroundPoint) and isinstance(bb, P.BeamNode):
+                loc = np.asarray(a.location, float)
+                for k in range(2):
+                    fix_coordinate(bb.beam, node_index(bb), k, loc[k])
+            else:
+                mbs.AddObject(eii.ObjectJointRevolute2D(markerNumbers=[position_marker(a), position_marker(bb)]))
+        elif isinstance(c, J.FixedJoint):
+            if not isinstance(c.point, P.BeamNode):
+                raise NotImplementedError("fixed joints other than beam node - body are not translated")
+            m_node = mbs.AddMarker(eii.MarkerNodeRigid(nodeNumber=beam_nodes[c.point.beam][node_index(c.point)]))
+            bp = c.body_point
+            m_body = mbs.AddMarker(eii.MarkerBodyRigid(
+                bodyNumber=body_objects[bp.body], localPosition=[*map(float, np.asarray(bp.local)), 0.0]))
+            phi = _rotation_angle(np.asarray(c.direction_local))  # slope direction in the body frame
+            cphi, sphi = math.cos(phi), math.sin(phi)
+            rot1 = [[cphi, -sphi, 0.0], [sphi, cphi, 0.0], [0.0, 0.0, 1.0]]
+            mbs.AddObject(eii.ObjectJointGeneric(markerNumbers=[m_node, m_body],
+                                                 constrainedAxes=[1, 1, 0, 0, 0, 1],
+                                                 rotationMarker1=rot1))
+        elif isinstance(c, J.SlidingJoint):
+            b = c.beam
+            n = int(system.beams[b].mesh.n_elements)
+            s_nodes = np.asarray(system.beams[b].mesh.node_arc_lengths, float)
+            s0 = float(q0[system.sliding_offset + c.sliding])
+            k0 = int(np.clip(np.searchsorted(s_nodes, s0, side="right") - 1, 0, n - 1))
+            cable_markers = [mbs.AddMarker(eii.MarkerBodyCable2DCoordinates(bodyNumber=e))
+                             for e in beam_elements[b]]
+            data = mbs.AddNode(eii.NodeGenericData(initialCoordinates=[float(k0), s0],
+                                                   numberOfDataCoordinates=2))
+            sliders.append(mbs.AddObject(eii.ObjectJointSliding2D(
+                markerNumbers=[position_marker(c.body_point), cable_markers[k0]],
+                slidingMarkerNumbers=cable_markers, slidingMarkerOffsets=list(s_nodes[:n]),
+                nodeNumber=data, useClassicalFormulation=True)))
+        elif isinstance(c, J.SlidingHold):
+            raise NotImplementedError("held sliding joints are not translated (release them first)")
+        else:
+            raise NotImplementedError(f"joint type {type(c).__name__} is not translated to Exudyn")
+
+    # ---- per beam one ObjectGenericODE2 on its nodes (no mass): the mass-proportional
+    # damping alpha * (Exudyn's own consistent beam mass matrix) and, optionally, the
+    # force cancelling the sliding joints' extra term
+    mbs.Assemble()
+    slid = {}
+    if cancel_sliding_term:
+        for j, c in zip(sliders, [c for c in system.constraints if isinstance(c, J.SlidingJoint)]):
+            slid.setdefault(c.beam, []).append(j)
+    extra = [b for b, beam in enumerate(system.beams) if float(beam.alpha) > 0.0 or b in slid]
+    mass = _mass_matrix(mbs) if extra else None
+    for b in extra:
+        ltg = np.concatenate([np.asarray(mbs.systemData.GetNodeLTGODE2(nd), int) for nd in beam_nodes[b]])
+        size = len(ltg)
+        mb = float(system.beams[b].alpha) * mass[np.ix_(ltg, ltg)]
+        rows, cols = np.nonzero(mb)
+        dmat = exu.MatrixContainer()
+        dmat.SetWithSparseMatrix(np.column_stack([rows, cols, mb[rows, cols]]), numberOfRows=size,
+                                 numberOfColumns=size)
+        zero = exu.MatrixContainer()
+        zero.SetWithSparseMatrix(np.zeros((0, 3)), numberOfRows=size, numberOfColumns=size)
+        kwargs = {}
+        if b in slid:
+            lengths = np.asarray(system.beams[b].mesh.element_lengths, float)
+            kwargs["forceUserFunction"] = _sliding_compensation(slid[b], lengths, size)
+
+            def no_jacobian(mbs_, t, item, q, q_t, f_ode2, f_ode2_t, _size=size):
+                # the compensating force depends on algebraic and data coordinates
+                # only: no ODE2 Jacobian (spares Exudyn's numerical differentiation)
+                jac = exu.MatrixContainer()
+                jac.SetWithSparseMatrix(np.zeros((0, 3)), numberOfRows=_size, numberOfColumns=_size)
+                return jac
+
+            kwargs["jacobianUserFunction"] = no_jacobian
+        mbs.AddObject(eii.ObjectGenericODE2(nodeNumbers=beam_nodes[b], massMatrix=zero,
+                                            dampingMatrix=dmat, **kwargs))
+
+    # ---- sensors (stored internally, no files)
+    def sensor(item):
+        return mbs.AddSensor(item)
+
+    ovt = exu.OutputVariableType
+    sensors = dict(
+        beam_q=[[sensor(eii.SensorNode(nodeNumber=nd, outputVariableType=ovt.Coordinates,
+                                       storeInternal=True, writeToFile=False)) for nd in nodes]
+                for nodes in beam_nodes],
+        beam_v=[[sensor(eii.SensorNode(nodeNumber=nd, outputVariableType=ovt.Coordinates_t,
+                                       storeInternal=True, writeToFile=False)) for nd in nodes]
+                for nodes in beam_nodes],
+        body_q=[sensor(eii.SensorNode(nodeNumber=nd, outputVariableType=ovt.Coordinates,
+                                      storeInternal=True, writeToFile=False)) for nd in body_nodes],
+        body_v=[sensor(eii.SensorNode(nodeNumber=nd, outputVariableType=ovt.Coordinates_t,
+                                      storeInternal=True, writeToFile=False)) for nd in body_nodes],
+        sliding_s=[sensor(eii.SensorObject(objectNumber=j, outputVariableType=ovt.SlidingCoordinate,
+                                           storeInternal=True, writeToFile=False)) for j in sliders],
+        sliding_p=[sensor(eii.SensorObject(objectNumber=j, outputVariableType=ovt.Position,
+                                           storeInternal=True, writeToFile=False)) for j in sliders],
+    )
+    mbs.Assemble()
+    return ExudynModel(name=name, system=system, sc=sc, mbs=mbs, beam_nodes=beam_nodes,
+                       beam_elements=beam_elements, beam_reference=beam_reference,
+                       body_nodes=body_nodes, body_objects=body_objects, body_reference=poses,
+                       sliders=sliders, sensors=sensors, integration=modes,
+                       setup_time_s=time.perf_counter() - t_start)
+
+
+def build_m1(n_elements: int = 6, *, integration: int = 0, initial=None, **overrides) -> ExudynModel:
+    """M1 in Exudyn (parameters: :data:`ancf_jax.models.m1.M1` with ``overrides``).
+
+    ``initial``: an ancf_jax ``(system, state)`` to translate (default: built here).
+    """
+    system, state = initial or ancf_system("M1", n_elements, integration=integration, **overrides)
+    return build_exudyn(system, state, name="M1")
+
+
+def build_m2(n_elements: int = 24, *, integration: int = 0, initial=None,
+             cancel_sliding_term: bool = False, **overrides) -> ExudynModel:
+    """M2 in Exudyn, released from ancf_jax's static equilibrium with the trolley held
+    at s₀ (:func:`ancf_jax.models.m2.m2_initial`; pass ``initial=(system, state)`` to
+    reuse one, since that solve takes ~20 s). ``cancel_sliding_term``: see
+    :func:`build_exudyn`."""
+    system, state = initial or ancf_system("M2", n_elements, integration=integration, **overrides)
+    return build_exudyn(system, state, name="M2", cancel_sliding_term=cancel_sliding_term)
+
+
+def build_h1(n_elements: int = 8, *, integration: int = 0, initial=None, **overrides) -> ExudynModel:
+    """H1 (very flexible pendulum, :data:`H1`) in Exudyn."""
+    system, state = initial or ancf_system("H1", n_elements, integration=integration, **overrides)
+    return build_exudyn(system, state, name="H1")
+
+
+# ------------------------------------------------------------------ histories and outputs
+@dataclasses.dataclass
+class Histories:
+    """State histories on an output grid, the same for both codes.
+
+    Attributes:
+        t: output times (N,).
+        nodes, velocities: per beam, (N, n + 1, 4) total nodal coordinates / velocities.
+        bodies, body_velocities: (N, nb, 3) poses (x, y, θ) and their rates.
+        sliding: (N, ns) sliding coordinates [m]; sliding_point: (N, ns, 2) point 1
+            (Exudyn: the joint's body point; ancf_jax: the beam point at s).
+    """
+
+    t: np.ndarray
+    nodes: list
+    velocities: list
+    bodies: np.ndarray
+    body_velocities: np.ndarray
+    sliding: np.ndarray
+    sliding_point: np.ndarray
+
+
+def ancf_histories(results) -> Histories:
+    """:class:`Histories` of an ancf_jax :class:`~ancf_jax.results.Results`."""
+    system = results.system
+    nodes = [results.nodes(name) for name in system.beam_names]
+    vel = [np.stack([np.asarray(system.beam_nodes(v, b)) for v in results.v])
+           for b in range(len(system.beams))]
+    nb = system.n_bodies
+    bodies = np.stack([results.body(nm) for nm in system.body_names], axis=1) if nb else np.zeros((len(results.t), 0, 3))
+    bvel = results.v[:, : 3 * nb].reshape(len(results.t), nb, 3)
+    s = np.stack([results.sliding(nm) for nm in system.sliding_names], axis=1) if system.n_sliding else np.zeros((len(results.t), 0))
+    sp = (np.stack([results.sliding_point(nm) for nm in system.sliding_names], axis=1)
+          if system.n_sliding else np.zeros((len(results.t), 0, 2)))
+    return Histories(np.asarray(results.t), nodes, vel, bodies, bvel, s, sp)
+
+
+def _element_rules(mode: int):
+    (ka, na), (kb, nb) = EXUDYN_RULES[mode]
+    return _rule(ka, na), _rule(kb, nb)
+
+
+def _hermite(xi, length):
+    """Cubic Hermite shape functions and derivatives at ξ ∈ [0, 1] (Exudyn's order:
+    node-0 position, node-0 slope, node-1 position, node-1 slope), each (P, 4)."""
+    xi = np.asarray(xi, float)
+    s = np.stack([1 - 3 * xi**2 + 2 * xi**3, length * (xi - 2 * xi**2 + xi**3),
+                  3 * xi**2 - 2 * xi**3, length * (-xi**2 + xi**3)], axis=-1)
+    s1 = np.stack([(-6 * xi + 6 * xi**2) / length, 1 - 4 * xi + 3 * xi**2,
+                   (6 * xi - 6 * xi**2) / length, -2 * xi + 3 * xi**2], axis=-1)
+    s2 = np.stack([(-6 + 12 * xi) / length**2, (-4 + 6 * xi) / length,
+                   (6 - 12 * xi) / length**2, (-2 + 6 * xi) / length], axis=-1)
+    return s, s1, s2
+
+
+def _map(shape, e):
+    """r = Σ S_i e_i for element coordinates e (..., 8) → (..., P, 2)."""
+    pos = e[..., None, 0:2] * shape[:, 0:1] + e[..., None, 2:4] * shape[:, 1:2]
+    return pos + e[..., None, 4:6] * shape[:, 2:3] + e[..., None, 6:8] * shape[:, 3:4]
+
+
+def cable_energies(system, hist: Histories, modes) -> dict:
+    """Energies [J] of a history, computed in NumPy with Exudyn's element definitions
+    (|r'| − 1, material curvature, Exudyn's Gauss rules): the same function for both
+    codes, independent of ancf_jax's JAX energy. Returns kinetic, gravity, strain and
+    total, each (N,)."""
+    g = np.asarray(system.gravity, float)
+    n_t = len(hist.t)
+    kin, pot, strain = np.zeros(n_t), np.zeros(n_t), np.zeros(n_t)
+    xg, wg = _rule("gauss", 4)  # exact for the mass integrals (degree 6)
+    for b, beam in enumerate(system.beams):
+        (xa, wa), (xb, wb) = _element_rules(modes[b])
+        sec = beam.section
+        ea = float(sec.youngs_modulus) * float(sec.area)
+        ei = float(sec.youngs_modulus) * float(sec.second_moment)
+        rho_a = float(sec.mass_per_length)
+        nodes, vel = hist.nodes[b], hist.velocities[b]
+        for i, length in enumerate(np.asarray(beam.mesh.element_lengths, float)[: int(beam.mesh.n_elements)]):
+            e = np.concatenate([nodes[:, i], nodes[:, i + 1]], axis=-1)
+            ev = np.concatenate([vel[:, i], vel[:, i + 1]], axis=-1)
+            s, _, _ = _hermite(xg, length)
+            r, v = _map(s, e), _map(s, ev)
+            kin += 0.5 * rho_a * length * np.einsum("p,tp->t", wg, np.sum(v * v, axis=-1))
+            pot -= rho_a * length * np.einsum("p,tp->t", wg, r @ g)
+            _, s1, _ = _hermite(xa, length)
+            rx = _map(s1, e)
+            eps = np.linalg.norm(rx, axis=-1) - 1.0
+            strain += 0.5 * ea * length * np.einsum("p,tp->t", wa, eps**2)
+            _, s1, s2 = _hermite(xb, length)
+            rx, rxx = _map(s1, e), _map(s2, e)
+            kappa = (rx[..., 0] * rxx[..., 1] - rx[..., 1] * rxx[..., 0]) / np.sum(rx * rx, axis=-1)
+            strain += 0.5 * ei * length * np.einsum("p,tp->t", wb, kappa**2)
+    for k in range(system.n_bodies):
+        m, jz = float(system.bodies.mass[k]), float(system.bodies.inertia[k])
+        bv = hist.body_velocities[:, k]
+        kin += 0.5 * m * np.sum(bv[:, :2] ** 2, axis=-1) + 0.5 * jz * bv[:, 2] ** 2
+        pot -= m * hist.bodies[:, k, :2] @ g
+    return dict(kinetic=kin, gravity=pot, strain=strain, total=kin + pot + strain)
+
+
+def model_outputs(name: str, system, hist: Histories, modes=None) -> dict:
+    """The compared outputs of a reference model from its :class:`Histories`.
+
+    M1: ``tip`` (N, 2) position of the last node, ``nodes`` (N, n + 1, 4).
+    M2: ``s`` (N,), ``point1`` (N, 2) sliding point, ``cabin`` (N, 2) cabin centre.
+    H1: ``tip`` (N, 2), ``energy`` (N,) total energy (:func:`cable_energies`).
+    """
+    if name == "M1":
+        return dict(tip=hist.nodes[0][:, -1, :2], nodes=hist.nodes[0])
+    if name == "M2":
+        return dict(s=hist.sliding[:, 0], point1=hist.sliding_point[:, 0],
+                    cabin=hist.bodies[:, system.body_names.index("cabin"), :2])
+    if name == "H1":
+        if modes is None:
+            modes = [integration_mode(b.formulation) for b in system.beams]
+        return dict(tip=hist.nodes[0][:, -1, :2], energy=cable_energies(system, hist, modes)["total"])
+    raise ModelError(f"model must be one of {MODELS}, got {name!r}")
+
+
+# ------------------------------------------------------------------ run
+@dataclasses.dataclass
+class ExudynRun:
+    """Result of :func:`run`.
+
+    Attributes:
+        name: model name; t: output times (N,); outputs: :func:`model_outputs`.
+        histories: the full :class:`Histories`.
+        wall_time_s: SolveDynamic wall time [s]; setup_time_s: translation, Assemble and
+            mass matrix [s].
+        steps: time steps taken; newton_iterations: total Newton iterations;
+        jacobians: Jacobian evaluations (= factorizations).
+        status: "ok" or "failed"; failure_time: time of the failed step [s] or None;
+        message: Exudyn's error; settings: what was used.
+    """
+
+    name: str
+    t: np.ndarray
+    outputs: dict
+    histories: Histories
+    wall_time_s: float
+    setup_time_s: float
+    steps: int
+    newton_iterations: int
+    jacobians: int
+    status: str
+    failure_time: float | None
+    message: str
+    settings: dict
+
+
+LINEAR_SOLVERS = ("EXUdense", "EigenSparse", "EigenDense")
+
+
+def simulation_settings(*, t_end: float, h: float, n_steps: int, output_dt: float,
+                        rho_inf: float = 0.9, relative_tolerance: float = 1e-8,
+                        absolute_tolerance: float = 1e-10, modified_newton: bool = True,
+                        max_iterations: int = 25, linear_solver: str = "EXUdense",
+                        discontinuous_tolerance: float = 1e-12,
+                        discontinuous_iterations: int = 5, threads: int = 1, verbose: int = 0):
+    """Exudyn SimulationSettings for a fixed-step index-3 generalized-α run.
+
+    The step is never adapted (``adaptiveStep = False``: a failed Newton iteration is
+    an error, not a smaller step) and the initial accelerations are computed from the
+    equations of motion, as ancf_jax does. ``discontinuous_tolerance``: a sliding
+    joint that leaves its element by more than this during a step repeats the step
+    on the next element (Exudyn's default, 1 m, keeps the extrapolated old element).
+    """
+    require_exudyn()
+    if linear_solver not in LINEAR_SOLVERS:
+        raise ModelError(f"linear_solver must be one of {LINEAR_SOLVERS}, got {linear_solver!r}")
+    ss = exu.SimulationSettings()
+    ti = ss.timeIntegration
+    ti.endTime = float(t_end)
+    ti.numberOfSteps = int(n_steps)
+    ti.verboseMode = int(verbose)
+    ti.adaptiveStep = False
+    ti.generalizedAlpha.spectralRadius = float(rho_inf)
+    ti.generalizedAlpha.useIndex2Constraints = False
+    ti.generalizedAlpha.useNewmark = False
+    ti.generalizedAlpha.computeInitialAccelerations = True
+    nt = ti.newton
+    nt.relativeTolerance = float(relative_tolerance)
+    nt.absoluteTolerance = float(absolute_tolerance)
+    nt.useModifiedNewton = bool(modified_newton)
+    nt.maxIterations = int(max_iterations)
+    ti.discontinuous.iterationTolerance = float(discontinuous_tolerance)
+    ti.discontinuous.maxIterations = int(discontinuous_iterations)
+    ti.discontinuous.ignoreMaxIterations = False
+    ss.linearSolver.solverType = getattr(exu.LinearSolverType, linear_solver)
+    ss.parallel.numberOfThreads = int(threads)
+    ss.solution.file.write = False
+    ss.solution.sensors.writePeriod = float(output_dt)
+    ss.show.computationTime = False
+    return ss
+
+
+def run(model: ExudynModel, *, t_end: float, dt: float, output_dt: float | None = None,
+        rho_inf: float = 0.9, relative_tolerance: float = 1e-8, absolute_tolerance: float = 1e-10,
+        modified_newton: bool = True, max_iterations: int = 25, linear_solver: str = "EXUdense",
+        discontinuous_tolerance: float = 1e-12, threads: int = 1, on_failure: str = "raise",
+        verbose: int = 0) -> ExudynRun:
+    """Integrate an :class:`ExudynModel` with Exudyn's generalized-α (index 3).
+
+    The step and output grid are those of :func:`ancf_jax.simulation.time_grid` for the
+    same ``t_end``, ``dt``, ``output_dt`` (identical steps in both codes). A model runs
+    once (Exudyn sensors accumulate); build a new one for another run.
+
+    Newton: Exudyn stops when the residual norm falls below ``relative_tolerance``
+    times the step's initial residual (or below ``absolute_tolerance``);
+    ``modified_newton`` keeps the Jacobian across iterations and steps (Exudyn's
+    default for time integration); ``False`` is full Newton.
+
+    Args:
+        on_failure: "raise" (RuntimeError) or "return" (histories up to the last
+            output time before the failure, ``status="failed"``).
+    """
+    require_exudyn()
+    if on_failure not in ("raise", "return"):
+        raise ModelError(f"on_failure must be 'raise' or 'return', got {on_failure!r}")
+    if model.used:
+        raise ModelError("this Exudyn model has already been run; build a new one")
+    model.used = True
+    n_int, sub, h, out_dt = time_grid(t_end, dt, output_dt)
+    n_steps = n_int * sub
+    settings = dict(t_end=float(t_end), h=h, output_dt=out_dt, steps=n_steps, rho_inf=rho_inf,
+                    relative_tolerance=relative_tolerance, absolute_tolerance=absolute_tolerance,
+                    modified_newton=modified_newton, max_iterations=max_iterations,
+                    linear_solver=linear_solver, discontinuous_tolerance=discontinuous_tolerance,
+                    threads=threads, integration=model.integration)
+    ss = simulation_settings(t_end=n_steps * h, h=h, n_steps=n_steps, output_dt=out_dt,
+                             rho_inf=rho_inf, relative_tolerance=relative_tolerance,
+                             absolute_tolerance=absolute_tolerance, modified_newton=modified_newton,
+                             max_iterations=max_iterations, linear_solver=linear_solver,
+                             discontinuous_tolerance=discontinuous_tolerance, threads=threads,
+                             verbose=verbose)
+    mbs = model.mbs
+    status, message = "ok", ""
+    t0 = time.perf_counter()
+    try:
+        ok = mbs.SolveDynamic(ss, storeSolver=True, showHints=bool(verbose))
+        if not ok:
+            status, message = "failed", "SolveDynamic returned False"
+    except Exception as err:  # exudyn raises SolverError on failure
+        status, message = "failed", str(err)
+    wall = time.perf_counter() - t0
+    solver = mbs.sys.get("dynamicSolver")
+    it = solver.it if solver is not None else None
+    failure_time = float(it.currentTime) if (status != "ok" and it is not None) else None
+    if status != "ok" and on_failure == "raise":
+        raise RuntimeError(f"Exudyn {model.name}: {message} (t = {failure_time})")
+
+    t_grid = np.arange(n_int + 1) * out_dt
+    s = model.sensors
+    all_sensors = [k for group in s.values() for item in group
+                   for k in (item if isinstance(item, list) else [item])]
+    n_t = int(np.asarray(mbs.GetSensorStoredData(all_sensors[0])).shape[0])
+    if status != "ok" and failure_time is not None:
+        # keep the output times before the failed step
+        n_t = min(n_t, int(np.floor(failure_time / out_dt - 1e-9)) + 1)
+    n_t = max(1, min(n_t, n_int + 1))
+
+    def stored(sensor):
+        data = np.asarray(mbs.GetSensorStoredData(sensor))[:n_t]
+        if data.shape[0] != n_t or np.max(np.abs(data[:, 0] - t_grid[:n_t])) > 1e-9 * max(1.0, t_end):
+            raise RuntimeError(f"Exudyn sensor times do not match the output grid "
+                               f"({data.shape[0]} rows for {n_t} output times)")
+        return data[:, 1:]
+
+    nodes = [np.stack([stored(k) for k in ks], axis=1) + ref[None]
+             for ks, ref in zip(s["beam_q"], model.beam_reference)]
+    vel = [np.stack([stored(k) for k in ks], axis=1) for ks in s["beam_v"]]
+    nb = len(model.body_nodes)
+    bodies = (np.stack([stored(k) for k in s["body_q"]], axis=1) + model.body_reference[None]
+              if nb else np.zeros((n_t, 0, 3)))
+    bvel = np.stack([stored(k) for k in s["body_v"]], axis=1) if nb else np.zeros((n_t, 0, 3))
+    sl = (np.stack([stored(k)[:, 0] for k in s["sliding_s"]], axis=1) if model.sliders
+          else np.zeros((n_t, 0)))
+    sp = (np.stack([stored(k)[:, :2] for k in s["sliding_p"]], axis=1) if model.sliders
+          else np.zeros((n_t, 0, 2)))
+    hist = Histories(t_grid[:n_t], nodes, vel, bodies, bvel, sl, sp)
+    outputs = model_outputs(model.name, model.system, hist, model.integration) if model.name in MODELS else {}
+    return ExudynRun(name=model.name, t=t_grid[:n_t], outputs=outputs, histories=hist,
+                     wall_time_s=wall, setup_time_s=model.setup_time_s,
+                     steps=n_steps if status == "ok" else int(round((failure_time or 0.0) / h)) - 1,
+                     newton_iterations=int(it.newtonStepsCount) if it is not None else -1,
+                     jacobians=int(it.newtonJacobiCount) if it is not None else -1,
+                     status=status, failure_time=failure_time, message=message, settings=settings)
