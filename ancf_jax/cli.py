@@ -153,6 +153,8 @@ def build_parser() -> argparse.ArgumentParser:
     synth.add_argument("--rate", type=_positive_float, default=1000.0, help="sample rate [Hz] (default 1000)")
     synth.add_argument("--t-end", type=_positive_float, default=None,
                        help="last sample time [s] (default: the model's t_end)")
+    synth.add_argument("--dt", type=_positive_float, default=None,
+                       help="solver step [s] (default: the scenario's solver.dt)")
     synth.add_argument("--seed", type=_nonnegative_int, default=0, help="seed of the noise (default 0)")
     synth.add_argument("--output", default="tip_y", help="output column to sample (default tip_y)")
     synth.add_argument("--out", type=Path, required=True, help="CSV file to write")
@@ -178,6 +180,8 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--max-iter", type=_positive_int, default=None, help="iteration limit")
     fit.add_argument("--t-end", type=_positive_float, default=None,
                      help="simulated span [s] (default: the model's t_end); data must lie inside it")
+    fit.add_argument("--dt", type=_positive_float, default=None,
+                     help="solver step [s] (default: the scenario's solver.dt)")
     fit.add_argument("--out", type=Path, default=None, help="output directory (default results/MODEL-fit)")
     fit.add_argument("--no-figures", action="store_true", help="skip the figure")
     fit.add_argument("--no-progress", action="store_true", help="no per-iteration lines")
@@ -366,7 +370,7 @@ def _identification_problem(args, params):
             raise _UsageError(f"argument --elements: {e}") from None
     try:
         return Problem.from_scenario(args.model, params, output=args.output, overrides=args.overrides,
-                                     elements=elements, t_end=args.t_end)
+                                     elements=elements, t_end=args.t_end, dt=args.dt)
     except (ScenarioError, ModelError) as e:
         raise _UsageError(str(e)) from None
 

@@ -1,12 +1,14 @@
 """Fitting: Levenberg–Marquardt (default) or an optax optimiser on log-parameters.
 
-Parameters are log-parametrised, θ = log p, so damping coefficients, moduli and masses
-stay positive; θ is kept within ten decades of the initial guess on either side, and a
-parameter that runs to that floor (its best value is 0 or below) is held there while the
-gradient pushes it further down (an active bound), so the fit still converges.
+Both optimisers work on θ = log p (log-parametrisation), so damping coefficients, moduli
+and masses stay positive; θ is kept above a floor ten decades below the initial guess,
+and a parameter that runs to that floor (its best value is 0 or below, e.g. β fitted to
+data made with β = 0) is held there while the gradient pushes it further down (an active
+bound), so the fit still converges; the report then calls it not distinguishable from
+zero. A free α or β whose initial value is 0 starts at ``ZERO_START`` instead.
 
 Levenberg–Marquardt (Marquardt's scaling, Nielsen's damping update) uses the residual
-Jacobian J = ∂r/∂p from one forward-mode pass per evaluation
+Jacobian J_θ = ∂r/∂p · diag(p) from one forward-mode pass per evaluation
 (:meth:`~.problem.Problem.evaluate`); each iteration costs one simulation with
 derivatives. optax (Adam by default) uses the gradient 2 Jᵀr of the same evaluation.
 On M1 LM converges in a handful of iterations where Adam needs hundreds (see
@@ -44,6 +46,8 @@ from .report import DETERMINED, FIXED, SIGNIFICANCE, UNDETERMINED, ZERO, FitResu
 METHODS = ("lm", "adam")
 #: θ stays within this many decades of the initial guess
 DECADES = 10.0
+#: start of a free parameter whose initial value is 0 (e.g. M1's beta = 0)
+ZERO_START = {"alpha": 1e-2, "beta": 1e-5}
 
 
 def _progress_line(it: int, cost: np.ndarray, p: np.ndarray, names, active: np.ndarray) -> str:
@@ -88,24 +92,34 @@ def _gradient_test(m: _Member, mask, gtol, held) -> bool:
     return bool(np.max(cos) <= gtol)
 
 
-def _lm_trial(m: _Member, mask) -> tuple[np.ndarray, np.ndarray]:
-    """Projected Levenberg–Marquardt step in physical parameters: (trial p, held)."""
-    jf = m.jac[:, mask]
-    g = jf.T @ m.r
-    a = jf.T @ jf
+def _lm_trial(m: _Member, mask, lo) -> tuple[np.ndarray, np.ndarray]:
+    """Levenberg–Marquardt step on θ = log p: (trial p, held).
+
+    The step δ solves (J_θᵀJ_θ + λ diag(J_θᵀJ_θ)) δ = −J_θᵀr with J_θ = J_p diag(p)
+    (Marquardt's scaling: the step does not depend on the parameters' units). It is
+    applied as p ← p (1 + δ), i.e. θ ← θ + log(1 + δ): the same first-order step, but
+    exact for the Gauss–Newton model linear in p. So a parameter whose best value is 0
+    (β on data made with β = 0: δ → −1) reaches its floor in one or two steps instead
+    of losing a constant factor e per iteration, and no step raises a parameter by
+    more than the linear model asks. θ stays at or above its floor ``lo``; a parameter
+    at the floor that the gradient pushes further down is held (an active bound)."""
     pf = m.p[mask]
-    held = (pf <= 0.0) & (g > 0.0)  # at the lower bound p = 0, pushed further down
+    theta = np.log(pf)
+    jt = m.jac[:, mask] * pf[None, :]
+    g = jt.T @ m.r
+    a = jt.T @ jt
+    held = (theta <= lo + 1e-9) & (g > 0.0)
     live = ~held & (np.diag(a) > 0)
     step = np.zeros_like(pf)
     if live.any():
         al = a[np.ix_(live, live)]
         d = np.diag(al)
         step[live] = np.linalg.solve(al + m.lam * np.diag(d), -g[live])
-    new = np.maximum(pf + step, 0.0)
+    new = np.maximum(theta + np.log(np.maximum(1.0 + step, 1e-300)), lo)
     trial = m.p.copy()
-    trial[mask] = new
-    dp = new - pf
-    m.pred = m.cost - float(np.sum((m.r + jf @ dp) ** 2))
+    trial[mask] = np.exp(new)
+    # predicted decrease of the model linear in p
+    m.pred = m.cost - float(np.sum((m.r + m.jac[:, mask] @ (trial[mask] - pf)) ** 2))
     return trial, held
 
 
@@ -123,16 +137,17 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
     if method not in METHODS and optimizer is None:
         raise ModelError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     B = len(p0)
-    if use_optax:
-        bad = np.argwhere(p0[:, mask] <= 0)
-        if bad.size:
-            n = [x for x, k in zip(names, mask) if k][bad[0][1]]
-            raise ModelError(f"initial value of {n} must be > 0 for {method} (it works on log p)")
-    say: Optional[Callable[[str], None]] = None
+    bad = np.argwhere(p0[:, mask] <= 0)
+    if bad.size:
+        n = [x for x, k in zip(names, mask) if k][bad[0][1]]
+        raise ModelError(f"initial value of {n} must be > 0 (the fit works on log {n})")
+    say: Optional[Callable[[str], None]] = progress if callable(progress) else None
+    bar = None
     if progress is True:
-        say = lambda s: print(s, file=sys.stderr, flush=True)  # noqa: E731
-    elif callable(progress):
-        say = progress
+        from tqdm.auto import tqdm
+        bar = tqdm(total=max_iterations, desc=f"fit ({'optax' if optimizer is not None else method})",
+                   unit="it", file=sys.stderr, leave=True, dynamic_ncols=True,
+                   bar_format="{desc}: {n}/{total} it [{elapsed}] {postfix}")
 
     compile0 = problem.compile_time_s
     tw = time.perf_counter()
@@ -145,19 +160,23 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
     y_init = yg.copy()
     data_of = (lambda b: datasets[b]) if len(datasets) == B else (lambda b: datasets[0])
     evaluations = 1
+    lo = np.log(np.where(mask, p0, 1.0)) - DECADES * math.log(10)
     if use_optax:
         import optax
         opt = optimizer if optimizer is not None else optax.adam(learning_rate)
-        lo = np.log(np.where(mask, p0, 1.0)) - DECADES * math.log(10)
         best = [(m.cost, m.p, m.r, m.jac, m.y) for m in members]
         stall = np.zeros(B, int)
         for m in members:
             m.opt_state = opt.init(np.log(m.p[mask]))
 
     def line(it):
+        text = _progress_line(it, np.array([m.cost for m in members]), np.stack([m.p for m in members]),
+                              names, np.array([m.active for m in members]))
         if say:
-            say(_progress_line(it, np.array([m.cost for m in members]), np.stack([m.p for m in members]),
-                               names, np.array([m.active for m in members])))
+            say(text)
+        if bar is not None:
+            bar.n = it
+            bar.set_postfix_str("loss" + text.split("loss", 1)[1], refresh=True)
 
     line(0)
     for it in range(1, max_iterations + 1):
@@ -177,9 +196,10 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
                 upd, m.opt_state = opt.update(np.where(held, 0.0, 2.0 * jt.T @ m.r), m.opt_state, theta)
                 trials[b, mask] = np.exp(np.maximum(theta + np.asarray(upd), lo[b, mask]))
             else:
-                trial, held = _lm_trial(m, mask)
+                trial, held = _lm_trial(m, mask, lo[b, mask])
                 if _gradient_test(m, mask, gtol, held):
-                    m.stop("gradient below gtol" + (" (parameter at its bound 0)" if held.any() else ""))
+                    m.stop("gradient below gtol" + (" (a parameter held at its floor, i.e. 0)"
+                                                     if held.any() else ""))
                     continue
                 trials[b] = trial
         if not any(m.active for m in members):
@@ -227,6 +247,8 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
                     m.stop("no decrease possible (numerical noise floor)")
             m.history.append(m.cost)
         line(it)
+    if bar is not None:
+        bar.close()
     if use_optax:
         for b, m in enumerate(members):
             m.cost, m.p, m.r, m.jac, m.y = best[b]
@@ -240,13 +262,15 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
         se_free, corr, _ = gauss_newton_statistics(m.r, m.jac[:, mask], n_eff)
         se = np.full(len(names), np.nan)
         se[mask] = se_free
+        # a parameter at its floor (10 decades below its start) is at its bound 0
+        at_floor = mask & (np.log(np.maximum(m.p, 1e-300)) <= lo[b] + 1e-6)
         status = []
         for k in range(len(names)):
             if not mask[k]:
                 status.append(FIXED)
             elif not np.isfinite(se[k]):
                 status.append(UNDETERMINED)
-            elif m.p[k] < SIGNIFICANCE * se[k]:
+            elif at_floor[k] or m.p[k] < SIGNIFICANCE * se[k]:
                 status.append(ZERO)
             else:
                 status.append(DETERMINED)
@@ -261,8 +285,14 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
     return out
 
 
-def _initial(problem: Problem, init) -> np.ndarray:
-    return problem.vector(init)
+def _initial(problem: Problem, init, free) -> np.ndarray:
+    """Initial values; a free alpha or beta whose value is 0 (given, or the model's)
+    starts at ZERO_START instead (log-parameters cannot start at 0)."""
+    p = problem.vector(init)
+    for k, par in enumerate(problem.params):
+        if par.name in free and p[k] == 0.0 and par.kind in ZERO_START:
+            p[k] = ZERO_START[par.kind]
+    return p
 
 
 def fit(problem: Problem, data: Measurements, init: dict | Sequence[float] | None = None, *,
@@ -308,7 +338,8 @@ def fit_batch(problem: Problem, datasets: Sequence[Measurements], inits: Sequenc
     """
     datasets = [problem.prepare(d, window) for d in datasets]
     inits = [None] if inits is None or len(inits) == 0 else list(inits)
-    p0 = np.stack([_initial(problem, i) for i in inits])
+    free = problem.names if free is None else tuple(free)
+    p0 = np.stack([_initial(problem, i, free) for i in inits])
     if len(datasets) > 1 and len(p0) > 1 and len(datasets) != len(p0):
         raise ModelError(f"{len(datasets)} data sets and {len(p0)} initial guesses: give one of either, "
                          "or equally many (paired)")
@@ -316,7 +347,6 @@ def fit_batch(problem: Problem, datasets: Sequence[Measurements], inits: Sequenc
     p0 = np.broadcast_to(p0, (b, p0.shape[1])).copy()
     if max_iterations is None:
         max_iterations = 500 if (method == "adam" or optimizer is not None) else 50
-    free = problem.names if free is None else tuple(free)
     return _fit(problem, datasets, p0, free, method=method, max_iterations=int(max_iterations),
                 xtol=xtol, ftol=ftol, gtol=gtol, learning_rate=learning_rate, optimizer=optimizer,
                 progress=progress)

@@ -243,7 +243,8 @@ class Problem:
     @classmethod
     def from_scenario(cls, source="m1", params=("alpha", "beta"), output: str | None = "tip_y", *,
                       overrides: Sequence[str] = (), elements: int | None = None,
-                      t_end: float | None = None, solver_options: dict | None = None) -> "Problem":
+                      t_end: float | None = None, dt: float | None = None,
+                      solver_options: dict | None = None) -> "Problem":
         """A problem on a shipped scenario (``"m1"``) or scenario file.
 
         Args:
@@ -253,10 +254,16 @@ class Problem:
             overrides: ``--set`` items (``"solver.dt=2e-3"``).
             elements: element count of the (single) beam.
             t_end: simulated span [s] (default: the scenario's ``solver.t_end``).
+            dt: solver step [s] (default: the scenario's ``solver.dt``; also sets
+                ``outputs.dt``, which must not be shorter).
             solver_options: solver options on top of the scenario's.
         """
         from ..scenario import load_scenario
         extra = list(overrides)
+        if dt is not None:
+            from ..validation import check_positive
+            dt = check_positive("dt", dt, "s")
+            extra += [f"solver.dt={dt!r}", f"outputs.dt={dt!r}"]
         sc = load_scenario(source, extra)
         if elements is not None:
             if len(sc.beam_elements) != 1:

@@ -124,6 +124,36 @@ class FitResult:
             return None
         return float(self.estimates[k] + SIGNIFICANCE * self.stderr[k])
 
+    def identifiable(self, name: str) -> Optional[bool]:
+        """Whether the data determine ``name`` (None for a fixed parameter)."""
+        s = self.status[self.names.index(name)]
+        return None if s == FIXED else s == DETERMINED
+
+    def identifiability(self, name: str) -> str:
+        """One sentence: why ``name`` is or is not determined, from its standard error
+        and its correlations."""
+        k = self.names.index(name)
+        s, u, se, est = self.status[k], self.units[k], self.stderr[k], self.estimates[k]
+        free = [n for n in self.names if n in self.free]
+        corr = ""
+        if name in free and len(free) > 1:
+            i = free.index(name)
+            rhos = [(abs(self.correlation[i, j]), free[j], self.correlation[i, j])
+                    for j in range(len(free)) if j != i and np.isfinite(self.correlation[i, j])]
+            if rhos:
+                _, other, rho = max(rhos)
+                corr = f"; correlation with {other} {rho:+.3f}"
+        if s == FIXED:
+            return "fixed (not fitted)"
+        if s == UNDETERMINED:
+            return ("the fitted output does not depend on it, or it cannot be separated from the other "
+                    "parameters (JᵀJ is singular)")
+        if s == ZERO:
+            return (f"not distinguishable from zero: the estimate {est:.3g} {u} is within "
+                    f"{SIGNIFICANCE:g} standard errors ({se:.3g} {u}) of 0, so the data cannot tell it "
+                    f"from 0; 95 % upper bound {self.upper_bound(name):.3g} {u}{corr}")
+        return f"determined: relative standard error {se / abs(est):.2%}{corr}"
+
     def notes(self) -> list[str]:
         """Sentences on identifiability (strong correlations, undetermined parameters)."""
         out = []
@@ -154,10 +184,13 @@ class FitResult:
             d[n] = self.value(n)
             d[f"{n}_stderr"] = _num(self.stderr[k]) if self.status[k] != FIXED else None
             d[f"{n}_status"] = self.status[k]
+            d[f"{n}_identifiable"] = self.identifiable(n)
+            d[f"{n}_identifiability"] = self.identifiability(n)
             d[f"{n}_unit"] = self.units[k]
             if self.status[k] == ZERO:
                 d[f"{n}_upper_95"] = self.upper_bound(n)
         d["init"] = {n: float(v) for n, v in zip(self.names, self.init)}
+        d["raw_estimates"] = {n: float(v) for n, v in zip(self.names, self.estimates)}
         d["correlation"] = {"params": [n for n in self.names if n in self.free],
                             "matrix": [[_num(x) for x in row] for row in self.correlation]}
         d["notes"] = self.notes()
