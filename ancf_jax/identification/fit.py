@@ -115,7 +115,9 @@ def _lm_trial(m: _Member, mask, lo) -> tuple[np.ndarray, np.ndarray]:
         al = a[np.ix_(live, live)]
         d = np.diag(al)
         step[live] = np.linalg.solve(al + m.lam * np.diag(d), -g[live])
-    new = np.maximum(theta + np.log(np.maximum(1.0 + step, 1e-300)), lo)
+    # a parameter the step lowers by more than a factor 1e6 goes to its floor (its best
+    # value is 0 or below)
+    new = np.where(1.0 + step < 1e-6, lo, np.maximum(theta + np.log(np.maximum(1.0 + step, 1e-300)), lo))
     trial = m.p.copy()
     trial[mask] = np.exp(new)
     # predicted decrease of the model linear in p
@@ -262,8 +264,9 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
         se_free, corr, _ = gauss_newton_statistics(m.r, m.jac[:, mask], n_eff)
         se = np.full(len(names), np.nan)
         se[mask] = se_free
-        # a parameter at its floor (10 decades below its start) is at its bound 0
-        at_floor = mask & (np.log(np.maximum(m.p, 1e-300)) <= lo[b] + 1e-6)
+        # a parameter at (within two decades of) its floor, ten decades below its start,
+        # is at its bound 0
+        at_floor = mask & (np.log(np.maximum(m.p, 1e-300)) <= lo[b] + 2.0 * math.log(10.0))
         status = []
         for k in range(len(names)):
             if not mask[k]:
