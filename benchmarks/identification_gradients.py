@@ -1,6 +1,6 @@
 """Cost of derivatives through the solver for damping identification (issue 7/8).
 
-Model M1 (2 s, generalized-alpha, h = 1 ms, 2001 tip samples at 1 kHz) with 3 and 6
+Model M1 (default 2 s, generalized-alpha, h = 1 ms, tip samples at 1 kHz) with 3 and 6
 elements. For each: one forward run (output only), the residuals with the full
 Jacobian by forward mode (alpha, beta: two tangents; alpha alone: one), the loss with
 its gradient by reverse mode, and the agreement of the two gradients; compile and run
@@ -8,7 +8,7 @@ times (best of 3). Then derivative checks that the tests do not run: gradients w
 respect to E and the tip mass, and the reverse-mode gradient with respect to the initial
 velocities, against central differences; and LM against Adam on a noise-free fit.
 
-    python benchmarks/identification_gradients.py [--quick]
+    python benchmarks/identification_gradients.py [--quick] [--t-end T] [--dt H]
 
 Writes benchmarks/results/identification_gradients.json. The timings are wall-clock
 on whatever machine runs it: compare ratios, not seconds (the load average is recorded).
@@ -30,6 +30,7 @@ from ancf_jax.system import State
 
 OUT = Path(__file__).parent / "results" / "identification_gradients.json"
 TRUTH = {"alpha": 0.02, "beta": 0.0}
+T_END, DT = 2.0, 1e-3
 
 
 def best_of(fn, n=3):
@@ -42,7 +43,7 @@ def best_of(fn, n=3):
 
 
 def timing(elements: int) -> dict:
-    pr = Problem.from_scenario("m1", ("alpha", "beta"), elements=elements, t_end=2.0)
+    pr = Problem.from_scenario("m1", ("alpha", "beta"), elements=elements, t_end=T_END, dt=DT)
     data, _ = synthesize(pr, TRUTH, noise=0.0, program="values")
     p = np.array([0.03, 1e-5])
     c0 = pr.compile_time_s
@@ -57,7 +58,7 @@ def timing(elements: int) -> dict:
     rev = best_of(lambda: pr.loss_and_gradient_reverse(p, data))
     lf, gf, _ = pr.loss_and_gradient(p, data)
     lr, gr, _ = pr.loss_and_gradient_reverse(p, data)
-    pa = Problem.from_scenario("m1", ("alpha",), elements=elements, t_end=2.0)
+    pa = Problem.from_scenario("m1", ("alpha",), elements=elements, t_end=T_END, dt=DT)
     pa.evaluate([0.03], [data])
     jac1 = best_of(lambda: pa.evaluate([0.03], [data]))
     out = dict(elements=elements, forward_run_s=fwd, forward_compile_s=c0,
@@ -80,7 +81,7 @@ def central(fn, p, k, rel=1e-3):
 
 def other_parameters() -> dict:
     """Gradients w.r.t. E and the tip mass (forward mode) against central differences."""
-    pr = Problem.from_scenario("m1", ("alpha", "E", "tip_mass"), elements=3, t_end=2.0)
+    pr = Problem.from_scenario("m1", ("alpha", "E", "tip_mass"), elements=3, t_end=T_END, dt=DT)
     data, _ = synthesize(pr, {"alpha": 0.02, "E": 200e9, "tip_mass": 0.02}, noise=0.0, program="jacobian")
     p = np.array([0.03, 190e9, 0.021])
     _, g, _ = pr.loss_and_gradient(p, data)
@@ -102,7 +103,7 @@ def other_parameters() -> dict:
 def initial_state() -> dict:
     """Reverse-mode gradient w.r.t. the initial velocities against a central difference
     along the gradient direction (hundreds of inputs, one loss: reverse mode)."""
-    pr = Problem.from_scenario("m1", ("alpha", "beta"), elements=3, t_end=2.0)
+    pr = Problem.from_scenario("m1", ("alpha", "beta"), elements=3, t_end=T_END, dt=DT)
     data, _ = synthesize(pr, TRUTH, noise=0.0, program="values")
     p = np.array([0.03, 1e-5])
     t0 = time.perf_counter()
@@ -128,7 +129,7 @@ def initial_state() -> dict:
 
 def lm_vs_adam() -> dict:
     """Noise-free alpha-only fit from alpha = 0.005: LM against Adam (lr 0.1 on log alpha)."""
-    pr = Problem.from_scenario("m1", ("alpha", "beta"), elements=3, t_end=2.0)
+    pr = Problem.from_scenario("m1", ("alpha", "beta"), elements=3, t_end=T_END, dt=DT)
     data, _ = synthesize(pr, TRUTH, noise=0.0, program="jacobian")
     out = {}
     for method, kw in (("lm", {}), ("adam", dict(learning_rate=0.1, max_iterations=150))):
@@ -146,8 +147,13 @@ def lm_vs_adam() -> dict:
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true", help="3 elements only, skip Adam")
+    ap.add_argument("--t-end", type=float, default=2.0, help="simulated span [s] (default 2)")
+    ap.add_argument("--dt", type=float, default=1e-3, help="step [s] (default 1e-3)")
     args = ap.parse_args()
-    res = dict(machine=dict(cpus=os.cpu_count(), load_average_start=os.getloadavg()))
+    global T_END, DT
+    T_END, DT = args.t_end, args.dt
+    res = dict(machine=dict(cpus=os.cpu_count(), load_average_start=os.getloadavg()),
+               setup=dict(t_end=T_END, dt=DT, samples_hz=1000.0))
     res["timing"] = [timing(n) for n in ((3,) if args.quick else (3, 6))]
     res["other_parameters"] = other_parameters()
     res["initial_state"] = initial_state()

@@ -147,9 +147,9 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
     bar = None
     if progress is True:
         from tqdm.auto import tqdm
-        bar = tqdm(total=max_iterations, desc=f"fit ({'optax' if optimizer is not None else method})",
-                   unit="it", file=sys.stderr, leave=True, dynamic_ncols=True,
-                   bar_format="{desc}: {n}/{total} it [{elapsed}] {postfix}")
+        label = f"fit ({'optax' if optimizer is not None else method})"
+        bar = tqdm(total=max_iterations, desc=f"{label}, compiling", unit="it", file=sys.stderr, leave=True,
+                   dynamic_ncols=True, bar_format="{desc}: {n}/{total} it [{elapsed}]{postfix}")
 
     compile0 = problem.compile_time_s
     tw = time.perf_counter()
@@ -177,6 +177,8 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
         if say:
             say(text)
         if bar is not None:
+            if it == 0:
+                bar.set_description(label, refresh=False)
             bar.n = it
             bar.set_postfix_str("loss" + text.split("loss", 1)[1], refresh=True)
 

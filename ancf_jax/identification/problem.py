@@ -204,6 +204,21 @@ def stack_data(datasets: Sequence[Measurements], n: Optional[int] = None):
     return t, y, w
 
 
+_BUILT: dict = {}
+
+
+def _build(sc):
+    """(system, state) of a scenario, cached in-process by file, modification time and
+    overrides (building M1 costs seconds of eager JAX; systems are immutable)."""
+    try:
+        key = (str(sc.path), sc.path.stat().st_mtime_ns, tuple(sc.overrides))
+    except (OSError, TypeError, AttributeError):
+        return sc.build()
+    if key not in _BUILT:
+        _BUILT[key] = sc.build()
+    return _BUILT[key]
+
+
 class Problem:
     """A model, the parameters to identify, and the output they are fitted to.
 
@@ -280,7 +295,7 @@ class Problem:
             raise ModelError(f"scenario {sc.name!r} has no output named {output!r} "
                              f"(outputs: {', '.join(outs) or 'none'})")
         run = sc.solver
-        system, state = sc.build()
+        system, state = _build(sc)
         if sc.initial_mode == "static" and any(p.kind in ("E", "mass") for p in P.resolve(system, params)):
             raise ModelError(f"scenario {sc.name!r} starts from a static equilibrium, which depends on "
                              "E and the masses; only alpha and beta can be identified on it")
