@@ -1,6 +1,6 @@
 """Damping identification on synthetic M1 data: recovery and honest standard errors.
 
-Model M1 (3 elements, generalized-alpha at h = 1 ms, the paper's 2 s, tip Y-displacement
+Model M1 (3 elements, generalized-alpha at h = 2 ms, the paper's 2 s, tip Y-displacement
 sampled at 1 kHz: 2001 samples), truth alpha = 0.02 1/s, beta = 0. Three studies, each
 one vmapped batch of 20 members (one compiled program for all of them):
 
@@ -49,7 +49,7 @@ def main():
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--elements", type=int, default=3)
     ap.add_argument("--t-end", type=float, default=2.0)
-    ap.add_argument("--dt", type=float, default=1e-3)
+    ap.add_argument("--dt", type=float, default=2e-3)
     ap.add_argument("--rate", type=float, default=1000.0)
     args = ap.parse_args()
     n = args.seeds
