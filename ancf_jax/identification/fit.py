@@ -10,7 +10,8 @@ zero. A free α or β whose initial value is 0 starts at ``ZERO_START`` instead.
 Levenberg–Marquardt (Marquardt's scaling, Nielsen's damping update) uses the residual
 Jacobian J_θ = ∂r/∂p · diag(p) from one forward-mode pass per evaluation
 (:meth:`~.problem.Problem.evaluate`); each iteration costs one simulation with
-derivatives. optax (Adam by default) uses the gradient 2 Jᵀr of the same evaluation.
+derivatives. optax (Adam by default) uses the gradient 2 J_θᵀr / loss₀ of the same
+evaluation (scaled by the initial loss: losses in m² are far below Adam's ε).
 On M1 LM converges in a handful of iterations where Adam needs hundreds (see
 ``docs/identification.md`` and ``benchmarks/identification_gradients.py``).
 
@@ -197,7 +198,9 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
                 if _gradient_test(m, mask, gtol, held):
                     m.stop("gradient below gtol")
                     continue
-                upd, m.opt_state = opt.update(np.where(held, 0.0, 2.0 * jt.T @ m.r), m.opt_state, theta)
+                # gradient of loss / (initial loss): losses in m² are ~1e-9, below Adam's eps
+                grad = np.where(held, 0.0, 2.0 * jt.T @ m.r / m.cost0)
+                upd, m.opt_state = opt.update(grad, m.opt_state, theta)
                 trials[b, mask] = np.exp(np.maximum(theta + np.asarray(upd), lo[b, mask]))
             else:
                 trial, held = _lm_trial(m, mask, lo[b, mask])
