@@ -15,6 +15,10 @@ is at least two standard errors from zero; *not distinguishable from zero* other
 (the value is not printed; the report gives the 95 % upper bound estimate + 2 SE);
 *not determined* when the output does not depend on it or JᵀJ is numerically singular.
 Pairs with |ρ| > 0.95 are flagged: the data then fix mainly a combination of the two.
+A parameter the fit drove to its floor (ten decades below its start, i.e. 0) is *not
+distinguishable from zero* whatever its standard error. ``fit.json`` carries, per
+parameter, ``NAME_identifiable`` (true only when determined; null when fixed) and
+``NAME_identifiability`` (the reason, from the standard error and the correlations).
 """
 
 from __future__ import annotations
