@@ -248,8 +248,13 @@ class FitResult:
             ax.plot(d.t, d.y, ".", ms=2.0, color="0.55", label=f"data ({len(d)} samples)")
         init = ", ".join(f"{n} = {v:.3g}" for n, v in zip(self.names, self.init))
         ax.plot(self.t_grid, self.y_init, "--", color="tab:orange", lw=1.1, label=f"initial ({init})")
-        fit = ", ".join(f"{n} = {self.estimates[k]:.4g}" if self.status[k] in (DETERMINED, FIXED)
-                        else f"{n} ≈ 0" for k, n in enumerate(self.names))
+        def label(k, n):
+            if self.status[k] in (DETERMINED, FIXED):
+                return f"{n} = {self.estimates[k]:.4g}"
+            if self.status[k] == ZERO:
+                return f"{n} < {self.upper_bound(n):.3g} (95 %, not identifiable)"
+            return f"{n} not identifiable"
+        fit = ", ".join(label(k, n) for k, n in enumerate(self.names))
         ax.plot(self.t_grid, self.y_fit, color="tab:blue", lw=1.3, label=f"fitted ({fit})")
         ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
