@@ -160,10 +160,11 @@ def main():
     global T_END, DT, CPU
     T_END, DT, CPU = args.t_end, args.dt, args.cpu_time
     if args.timing_only:
-        res = json.loads(OUT.read_text()) if OUT.exists() else {}
-        res["timing_cpu" if CPU else "timing"] = dict(
-            clock="process CPU seconds" if CPU else "wall seconds", t_end=T_END, dt=DT,
-            load_average_start=os.getloadavg(), results=[timing(3, one_param=False)], load_average_end=os.getloadavg())
+        part = dict(clock="process CPU seconds" if CPU else "wall seconds", t_end=T_END, dt=DT,
+                    load_average_start=os.getloadavg(), results=[timing(3, one_param=False)],
+                    load_average_end=os.getloadavg())
+        res = json.loads(OUT.read_text()) if OUT.exists() else {}  # read after the run: merge
+        res["timing_cpu" if CPU else "timing"] = part
         OUT.parent.mkdir(exist_ok=True)
         OUT.write_text(json.dumps(res, indent=2))
         print(f"-> {OUT}")

@@ -15,13 +15,14 @@ implicit function theorem).
 
 Forward or reverse mode? Gauss–Newton needs the Jacobian ∂r/∂p (n_samples × n_params);
 forward mode gives it in one pass with n_params tangents, reverse mode would need one
-pass per sample (or gives only the gradient ∂loss/∂p). Measured on model M1 (3
-elements, 2 s, h = 1 ms, 2001 samples, one CPU core pair, ``python
-benchmarks/identification_gradients.py``): one forward run 0.48 s; residuals and the
-full 2-parameter Jacobian by forward mode 1.48 s (3.1× the run); value and gradient by
-reverse mode 2.02 s (4.2×) and 68 s to compile against 46 s. Forward mode is therefore
-the default for any few parameters; reverse mode (:meth:`Problem.state_gradient`) is
-what the initial state (hundreds of coordinates, one scalar loss) needs.
+backward pass per sample (in one pass it gives only the gradient ∂loss/∂p). Measured on
+model M1 (3 elements, 2 s, h = 1 ms, 2001 samples; CPU seconds, ``python
+benchmarks/identification_gradients.py --timing-only --cpu-time``): one run 0.24 s;
+residuals and the full 2-parameter Jacobian by forward mode 1.41 s (5.8 runs); value
+and gradient by reverse mode 1.03 s (4.2 runs); the two gradients agree to 4e-15.
+Forward mode is therefore the default for the few parameters of a fit; reverse mode
+(:meth:`Problem.state_gradient`) is what the initial state (as many inputs as
+coordinates, one scalar loss) needs.
 
 Compiled once: the parameters, measurement times, values and weights are traced
 arguments, so one compiled program serves every iteration, every noise seed and every
