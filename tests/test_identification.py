@@ -114,6 +114,7 @@ def test_optax_adam_descends_on_log_alpha(problem, clean):
     assert 0.005 < res.estimates[0] < 0.04
 
 
+@pytest.mark.slow  # compiles the vmapped program (the file's second compilation)
 def test_noise_free_recovery_batched_initial_guesses(problem, clean):
     """Initial guesses from 0.005 to 0.08 under one vmap: all recover alpha to 1e-4."""
     inits = [{"alpha": a, "beta": 1e-5} for a in (0.005, 0.01, 0.04, 0.08)]
@@ -124,6 +125,7 @@ def test_noise_free_recovery_batched_initial_guesses(problem, clean):
         assert r.estimates[1] <= 1e-12 and r.status[1] == ZERO
 
 
+@pytest.mark.slow  # compiles the vmapped program (the file's second compilation)
 def test_noisy_alpha_within_three_standard_errors_batched_seeds(problem, clean):
     """1 mm noise, four seeds as one vmapped batch of data sets, beta fixed at its true
     0: alpha within 3 of its standard errors in every seed; the standard errors agree
