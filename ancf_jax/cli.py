@@ -54,6 +54,27 @@ def _positive_int(text: str) -> int:
     return x
 
 
+def _nonnegative_int(text: str) -> int:
+    try:
+        x = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 0, got {text!r}") from None
+    if x < 0:
+        raise argparse.ArgumentTypeError(f"must be an integer >= 0, got {text!r}")
+    return x
+
+
+def _window(text: str) -> tuple[float, float]:
+    parts = text.split(",")
+    try:
+        lo, hi = (float(p) for p in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be two times T0,T1 in seconds, got {text!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi)) or hi <= lo:
+        raise argparse.ArgumentTypeError(f"must be two finite times T0 < T1, got {text!r}")
+    return lo, hi
+
+
 def _int_list(text: str) -> list[int]:
     parts = [p for p in text.split(",") if p.strip()]
     if not parts:
@@ -117,6 +138,53 @@ def build_parser() -> argparse.ArgumentParser:
     check = sub.add_parser("check", help="validate a scenario without running it")
     check.add_argument("model", metavar="MODEL", help="shipped scenario name or FILE.toml")
     check.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
+
+    synth = sub.add_parser("synth", help="synthetic measurements t,y of a model output (noisy)",
+                           description="Simulate a model with given Rayleigh coefficients and write "
+                                       "its output (default tip_y: M1's tip Y-displacement) at a sample "
+                                       "rate with Gaussian noise as CSV columns t,y.")
+    common(synth, "element count of the (single) beam")
+    synth.add_argument("--alpha", type=_nonnegative_float, default=None,
+                       help="Rayleigh alpha [1/s] (default: the model's)")
+    synth.add_argument("--beta", type=_nonnegative_float, default=None,
+                       help="Rayleigh beta [s] (default: the model's)")
+    synth.add_argument("--noise", type=_nonnegative_float, required=True,
+                       help="standard deviation of the Gaussian noise [m]")
+    synth.add_argument("--rate", type=_positive_float, default=1000.0, help="sample rate [Hz] (default 1000)")
+    synth.add_argument("--t-end", type=_positive_float, default=None,
+                       help="last sample time [s] (default: the model's t_end)")
+    synth.add_argument("--dt", type=_positive_float, default=None,
+                       help="solver step [s] (default: the scenario's solver.dt)")
+    synth.add_argument("--seed", type=_nonnegative_int, default=0, help="seed of the noise (default 0)")
+    synth.add_argument("--output", default="tip_y", help="output column to sample (default tip_y)")
+    synth.add_argument("--out", type=Path, required=True, help="CSV file to write")
+
+    fit = sub.add_parser("fit", help="identify Rayleigh alpha, beta (and E, tip_mass) from measured data",
+                         description="Fit model parameters to measured samples t,y of a model output "
+                                     "(default tip_y) by Levenberg-Marquardt with exact forward-mode "
+                                     "derivatives through the simulation; writes fit.json and fit.png.")
+    common(fit, "element count of the (single) beam")
+    fit.add_argument("--data", type=Path, action="append", required=True, metavar="CSV",
+                     help="measured samples with columns t,y (optional w: weights); repeat for a "
+                          "batch of data sets fitted under one vmap")
+    fit.add_argument("--params", default="alpha,beta",
+                     help="parameters to fit, comma-separated: alpha, beta, E, tip_mass (default alpha,beta)")
+    fit.add_argument("--init", action="append", default=[], metavar="NAME=VALUE,...",
+                     help="initial values, e.g. alpha=0.01,beta=1e-5 (default: the model's); repeat "
+                          "for several starts fitted under one vmap")
+    fit.add_argument("--output", default="tip_y", help="output column the data measure (default tip_y)")
+    fit.add_argument("--window", type=_window, default=None, metavar="T0,T1",
+                     help="fit only the samples with T0 <= t <= T1 [s]")
+    fit.add_argument("--method", choices=("lm", "adam"), default="lm",
+                     help="Levenberg-Marquardt (default) or Adam (optax)")
+    fit.add_argument("--max-iter", type=_positive_int, default=None, help="iteration limit")
+    fit.add_argument("--t-end", type=_positive_float, default=None,
+                     help="simulated span [s] (default: the model's t_end); data must lie inside it")
+    fit.add_argument("--dt", type=_positive_float, default=None,
+                     help="solver step [s] (default: the scenario's solver.dt)")
+    fit.add_argument("--out", type=Path, default=None, help="output directory (default results/MODEL-fit)")
+    fit.add_argument("--no-figures", action="store_true", help="skip the figure")
+    fit.add_argument("--no-progress", action="store_true", help="no per-iteration lines")
     return parser
 
 
@@ -289,6 +357,118 @@ def _check(args) -> int:
     return 0
 
 
+def _identification_problem(args, params):
+    """The identification problem of ``synth``/``fit`` (one-line errors, nothing compiled)."""
+    from .errors import ModelError
+    from .identification import Problem
+    from .scenario import ScenarioError
+    elements = None
+    if args.elements is not None:
+        try:
+            elements = _positive_int(args.elements)
+        except argparse.ArgumentTypeError as e:
+            raise _UsageError(f"argument --elements: {e}") from None
+    try:
+        return Problem.from_scenario(args.model, params, output=args.output, overrides=args.overrides,
+                                     elements=elements, t_end=args.t_end, dt=args.dt)
+    except (ScenarioError, ModelError) as e:
+        raise _UsageError(str(e)) from None
+
+
+def _synth(args) -> int:
+    import time
+
+    from .errors import ModelError
+    from .identification import synthesize, write_csv
+    problem = _identification_problem(args, ("alpha", "beta"))
+    values = {k: v for k, v in (("alpha", args.alpha), ("beta", args.beta)) if v is not None}
+    t0 = time.perf_counter()
+    try:
+        data, _ = synthesize(problem, values, noise=args.noise, rate=args.rate, seed=args.seed)
+    except ModelError as e:
+        raise _UsageError(str(e)) from None
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    write_csv(args.out, data.t, data.y)
+    p = problem.vector(values)
+    print(f"{problem.name}: {len(data)} samples of {problem.output.name} at {args.rate:g} Hz over "
+          f"[{data.t[0]:g}, {data.t[-1]:g}] s (alpha = {p[0]:g} 1/s, beta = {p[1]:g} s, noise "
+          f"{args.noise:g}, seed {args.seed}); compile {problem.compile_time_s:.1f} s, total "
+          f"{time.perf_counter() - t0:.1f} s -> {args.out}")
+    return 0
+
+
+def _parse_init(text: str) -> dict:
+    out = {}
+    for item in (x for x in text.split(",") if x.strip()):
+        name, eq, value = item.partition("=")
+        try:
+            v = float(value)
+        except ValueError:
+            v = math.nan
+        if not eq or not name.strip() or not math.isfinite(v) or v < 0:
+            raise _UsageError(f"argument --init: expected NAME=VALUE pairs with values >= 0 separated by "
+                              f"commas, got {text!r}")
+        out[name.strip()] = v
+    return out
+
+
+def _fit(args) -> int:
+    from .errors import ModelError, SimulationError
+    from .identification import fit_batch, read_csv
+    from .identification.data import DataError
+    requested = [p.strip() for p in args.params.split(",") if p.strip()]
+    if not requested:
+        raise _UsageError("argument --params: give at least one parameter")
+    inits = [_parse_init(t) for t in args.init]
+    datasets = []
+    for path in args.data:
+        try:
+            datasets.append(read_csv(path))
+        except DataError as e:
+            raise _UsageError(str(e)) from None
+    # alpha and beta are always reported (fixed at the model's values unless fitted)
+    names = list(dict.fromkeys(["alpha", "beta"] + requested))
+    problem = _identification_problem(args, names)
+    free = [p.name for p in problem.params if p.name in requested]
+    for i in inits:
+        unknown = set(i) - set(problem.names)
+        if unknown:
+            raise _UsageError(f"argument --init: unknown parameter(s) {', '.join(sorted(unknown))} "
+                              f"(parameters: {', '.join(problem.names)})")
+    out = Path(args.out) if args.out is not None else Path("results") / f"{problem.name}-fit"
+    try:
+        results = fit_batch(problem, datasets, inits or None, free=free, window=args.window,
+                            method=args.method, max_iterations=args.max_iter,
+                            progress=not args.no_progress)
+    except (DataError, ModelError) as e:
+        raise _UsageError(str(e)) from None
+    except SimulationError as e:
+        print(f"ancf-jax fit: {e}", file=sys.stderr)
+        return 1
+    out.mkdir(parents=True, exist_ok=True)
+    if len(results) == 1:
+        best = results[0]
+        report = best.to_dict()
+    elif len(datasets) > 1:
+        best = None
+        report = {"fits": [r.to_dict() for r in results]}
+    else:  # several starts on one data set: report the lowest loss, list every start
+        best = min(results, key=lambda r: r.loss_history[-1])
+        report = best.to_dict()
+        report["starts"] = [dict(init=r.to_dict()["init"], estimates=dict(zip(r.names, map(float, r.estimates))),
+                                 loss=r.loss_history[-1], iterations=r.iterations, converged=r.converged)
+                            for r in results]
+    (out / "fit.json").write_text(json.dumps(report, indent=2))
+    shown = results if best is None else [best]
+    for k, r in enumerate(shown):
+        print(r.summary())
+        if not args.no_figures:
+            name = "fit.png" if len(shown) == 1 else f"fit_{k + 1}.png"
+            r.figure(out / name, ylabel=f"{problem.output.name}")
+    print(f"-> {out}/")
+    return 0 if all(r.converged for r in results) else 1
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -296,7 +476,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return 0
     try:
-        return {"run": _run, "static": _static, "modal": _modal, "check": _check}[args.command](args)
+        return {"run": _run, "static": _static, "modal": _modal, "check": _check, "synth": _synth,
+                "fit": _fit}[args.command](args)
     except _UsageError as e:
         print(f"ancf-jax {args.command}: error: {e}", file=sys.stderr)
         return 2

@@ -1,0 +1,123 @@
+"""Identifiable parameters of a built system: names, units, reading and setting them.
+
+A parameter is named ``KIND`` or ``KIND.TARGET``:
+
+==============  ===============================================  ======
+``alpha``       Rayleigh mass-proportional coefficient α of a beam   1/s
+``beta``        Rayleigh stiffness-proportional coefficient β       s
+``E``           Young's modulus of a beam                            Pa
+``tip_mass``    mass of a rigid body (``mass.BODY`` for any body)    kg
+==============  ===============================================  ======
+
+Without ``.TARGET``, a beam parameter needs a system with exactly one beam; ``tip_mass``
+means the body named ``tip``, else the only body. Parameters are changed on a built
+:class:`~ancf_jax.system.System` with ``equinox.tree_at``, so they can be traced
+(differentiated, batched) without rebuilding or recompiling anything.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import equinox as eqx
+import jax.numpy as jnp
+
+from ..errors import ModelError
+from ..system import System
+
+#: kind -> (unit, what)
+KINDS = {
+    "alpha": ("1/s", "Rayleigh mass-proportional damping coefficient"),
+    "beta": ("s", "Rayleigh stiffness-proportional damping coefficient"),
+    "E": ("Pa", "Young's modulus"),
+    "mass": ("kg", "rigid-body mass"),
+}
+_ALIASES = {"youngs_modulus": "E", "tip_mass": "mass"}
+
+
+@dataclasses.dataclass(frozen=True)
+class Parameter:
+    """One identifiable parameter (hashable: a static part of compiled programs).
+
+    Attributes:
+        name: as the user wrote it (``alpha``, ``beta.cable``, ``tip_mass``, ...).
+        kind: ``alpha``, ``beta``, ``E`` or ``mass``.
+        target: beam or body name; index: its index in the system.
+    """
+
+    name: str
+    kind: str
+    target: str
+    index: int
+
+    @property
+    def unit(self) -> str:
+        return KINDS[self.kind][0]
+
+    def get(self, system: System):
+        """Current value (a JAX scalar)."""
+        if self.kind == "alpha":
+            return system.beams[self.index].alpha
+        if self.kind == "beta":
+            return system.beams[self.index].beta
+        if self.kind == "E":
+            return system.beams[self.index].section.youngs_modulus
+        return system.bodies.mass[self.index]
+
+    def set(self, system: System, value) -> System:
+        """A copy of ``system`` with this parameter set to ``value`` (traceable)."""
+        k = self.index
+        value = jnp.asarray(value, float)
+        if self.kind == "alpha":
+            return eqx.tree_at(lambda s: s.beams[k].alpha, system, value)
+        if self.kind == "beta":
+            return eqx.tree_at(lambda s: s.beams[k].beta, system, value)
+        if self.kind == "E":
+            return eqx.tree_at(lambda s: s.beams[k].section.youngs_modulus, system, value)
+        return eqx.tree_at(lambda s: s.bodies.mass, system, system.bodies.mass.at[k].set(value))
+
+
+def resolve(system: System, names) -> tuple[Parameter, ...]:
+    """Parameters of ``system`` named ``names`` (see module docstring).
+
+    Raises:
+        ModelError: an unknown kind or target, an ambiguous name, a repeated parameter.
+    """
+    if isinstance(names, str):
+        names = [n for n in names.split(",")]
+    out: list[Parameter] = []
+    for raw in names:
+        name = str(raw).strip()
+        kind, _, target = name.partition(".")
+        kind = _ALIASES.get(kind, kind)
+        if kind not in KINDS:
+            raise ModelError(f"unknown parameter {name!r}; known: alpha, beta, E, tip_mass "
+                             "(optionally .BEAM or .BODY, e.g. alpha.beam, mass.tip)")
+        if kind == "mass":
+            bodies = list(system.body_names)
+            if not target:
+                target = "tip" if "tip" in bodies else (bodies[0] if len(bodies) == 1 else "")
+                if not target:
+                    raise ModelError(f"parameter {name!r}: the system has {len(bodies)} bodies "
+                                     f"({', '.join(bodies) or 'none'}); name one as mass.BODY")
+            if target not in bodies:
+                raise ModelError(f"parameter {name!r}: no body named {target!r} "
+                                 f"(known: {', '.join(bodies) or 'none'})")
+            p = Parameter(name, kind, target, bodies.index(target))
+        else:
+            beams = list(system.beam_names)
+            if not target:
+                if len(beams) != 1:
+                    raise ModelError(f"parameter {name!r}: the system has {len(beams)} beams "
+                                     f"({', '.join(beams) or 'none'}); name one as {kind}.BEAM")
+                target = beams[0]
+            if target not in beams:
+                raise ModelError(f"parameter {name!r}: no beam named {target!r} "
+                                 f"(known: {', '.join(beams) or 'none'})")
+            p = Parameter(name, kind, target, beams.index(target))
+        if any((q.kind, q.index) == (p.kind, p.index) for q in out):
+            raise ModelError(f"parameter {name!r} is given twice")
+        out.append(p)
+    if not out:
+        raise ModelError("no parameters to fit")
+    return tuple(out)

@@ -1,0 +1,274 @@
+"""Fit reports: estimates, Gauss–Newton standard errors and correlations, an honest
+verdict on what the data determine, JSON, text and a figure.
+
+Statistics at the optimum (Gauss–Newton approximation): with weighted residuals
+r = sqrt(w/Σw)(y_sim − y) and J = ∂r/∂p over the N samples with positive weight and the
+n free parameters,
+
+    s² = Σ r² / (N − n),      Cov(p) ≈ s² (JᵀJ)⁻¹,      SE_k = sqrt(Cov_kk),
+    ρ_kl = Cov_kl / (SE_k SE_l),
+
+i.e. the measurement variance is estimated from the residuals (weights are relative).
+
+Verdict per parameter (damping coefficients are ≥ 0): *determined* when the estimate
+is at least two standard errors from zero; *not distinguishable from zero* otherwise
+(the value is not printed; the report gives the 95 % upper bound estimate + 2 SE);
+*not determined* when the output does not depend on it or JᵀJ is numerically singular.
+Pairs with |ρ| > 0.95 are flagged: the data then fix mainly a combination of the two.
+A parameter the fit drove to its floor (ten decades below its start, i.e. 0) is *not
+distinguishable from zero* whatever its standard error. ``fit.json`` carries, per
+parameter, ``NAME_identifiable`` (true only when determined; null when fixed) and
+``NAME_identifiability`` (the reason, from the standard error and the correlations).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+#: a parameter is "determined" when estimate >= SIGNIFICANCE * standard error
+SIGNIFICANCE = 2.0
+#: correlations above this (in magnitude) are reported as strong
+STRONG_CORRELATION = 0.95
+#: condition number of the scaled JᵀJ beyond which the fit is called singular
+MAX_CONDITION = 1e12
+
+DETERMINED = "determined"
+ZERO = "not distinguishable from zero"
+UNDETERMINED = "not determined"
+FIXED = "fixed"
+
+
+def gauss_newton_statistics(r: np.ndarray, jac: np.ndarray, n_samples: int):
+    """(standard errors (n,), correlation (n, n), s²) from residuals r (N,) and
+    J = ∂r/∂p (N, n) at the optimum; infinite standard errors where JᵀJ is singular."""
+    n = jac.shape[1]
+    dof = max(1, n_samples - n)
+    s2 = float(r @ r) / dof
+    a = jac.T @ jac
+    d = np.sqrt(np.diag(a))
+    se = np.full(n, np.inf)
+    corr = np.full((n, n), np.nan)
+    live = d > 0
+    if np.any(live):
+        scaled = a[np.ix_(live, live)] / np.outer(d[live], d[live])
+        if np.linalg.cond(scaled) < MAX_CONDITION:
+            inv = np.linalg.inv(scaled)
+            cov = s2 * inv / np.outer(d[live], d[live])
+            se[live] = np.sqrt(np.diag(cov))
+            sub = cov / np.outer(se[live], se[live])
+            idx = np.nonzero(live)[0]
+            corr[np.ix_(idx, idx)] = sub
+    np.fill_diagonal(corr, 1.0)
+    return se, corr, s2
+
+
+@dataclasses.dataclass
+class FitResult:
+    """Outcome of one fit (one data set, one initial guess).
+
+    Attributes:
+        names, units: all parameters of the problem; free: which were fitted.
+        init: initial values (physical units); estimates: final values (raw optimiser
+            output, also for parameters the data do not determine).
+        stderr: Gauss–Newton standard errors (NaN for fixed parameters).
+        correlation: correlation matrix of the free parameters (n_free × n_free).
+        status: per parameter, one of determined / not distinguishable from zero /
+            not determined / fixed.
+        loss_history: weighted mean squared error [output unit²] at the start and after
+            every iteration.
+        iterations: optimiser iterations; evaluations: simulations with derivatives.
+        converged, stop_reason: the stopping rule that ended the fit.
+        residual_rms: sqrt(final loss) [output unit]; n_samples: samples with w > 0.
+        wall_time_s: fit time without compilation; compile_time_s: compilation.
+        t_grid, y_fit, y_init: the simulated output on the step grid at the estimate and
+            at the initial guess; data: the measurements fitted.
+    """
+
+    names: tuple
+    units: tuple
+    free: tuple
+    init: np.ndarray
+    estimates: np.ndarray
+    stderr: np.ndarray
+    correlation: np.ndarray
+    status: tuple
+    loss_history: list
+    iterations: int
+    evaluations: int
+    converged: bool
+    stop_reason: str
+    residual_rms: float
+    n_samples: int
+    wall_time_s: float
+    compile_time_s: float
+    method: str
+    t_grid: np.ndarray
+    y_fit: np.ndarray
+    y_init: np.ndarray
+    data: object = None
+    model: str = ""
+    output: str = ""
+
+    # ------------------------------------------------------------------ verdicts
+    def value(self, name: str) -> Optional[float]:
+        """The estimate if the data determine it (or it was fixed), else None."""
+        k = self.names.index(name)
+        return float(self.estimates[k]) if self.status[k] in (DETERMINED, FIXED) else None
+
+    def upper_bound(self, name: str) -> Optional[float]:
+        """95 % upper bound (estimate + 2 SE) of a parameter not distinguishable from zero."""
+        k = self.names.index(name)
+        if self.status[k] != ZERO:
+            return None
+        return float(self.estimates[k] + SIGNIFICANCE * self.stderr[k])
+
+    def identifiable(self, name: str) -> Optional[bool]:
+        """Whether the data determine ``name`` (None for a fixed parameter)."""
+        s = self.status[self.names.index(name)]
+        return None if s == FIXED else s == DETERMINED
+
+    def identifiability(self, name: str) -> str:
+        """One sentence: why ``name`` is or is not determined, from its standard error
+        and its correlations."""
+        k = self.names.index(name)
+        s, u, se, est = self.status[k], self.units[k], self.stderr[k], self.estimates[k]
+        free = [n for n in self.names if n in self.free]
+        corr = ""
+        if name in free and len(free) > 1:
+            i = free.index(name)
+            rhos = [(abs(self.correlation[i, j]), free[j], self.correlation[i, j])
+                    for j in range(len(free)) if j != i and np.isfinite(self.correlation[i, j])]
+            if rhos:
+                _, other, rho = max(rhos)
+                corr = f"; correlation with {other} {rho:+.3f}"
+        if s == FIXED:
+            return "fixed (not fitted)"
+        if s == UNDETERMINED:
+            return ("the fitted output does not depend on it, or it cannot be separated from the other "
+                    "parameters (JᵀJ is singular)")
+        if s == ZERO:
+            return (f"not distinguishable from zero: the estimate {est:.3g} {u} is within "
+                    f"{SIGNIFICANCE:g} standard errors ({se:.3g} {u}) of 0, so the data cannot tell it "
+                    f"from 0; 95 % upper bound {self.upper_bound(name):.3g} {u}{corr}")
+        return f"determined: relative standard error {se / abs(est):.2%}{corr}"
+
+    def notes(self) -> list[str]:
+        """Sentences on identifiability (strong correlations, undetermined parameters)."""
+        out = []
+        free = [n for n in self.names if n in self.free]
+        for i, a in enumerate(free):
+            for j in range(i + 1, len(free)):
+                rho = self.correlation[i, j]
+                if np.isfinite(rho) and abs(rho) > STRONG_CORRELATION:
+                    out.append(f"{a} and {free[j]} are strongly correlated (rho = {rho:+.3f}): the data "
+                               f"determine mainly a combination of them, not each one")
+        for n, s in zip(self.names, self.status):
+            k = self.names.index(n)
+            if s == ZERO:
+                out.append(f"{n} is not distinguishable from zero: its estimate is within "
+                           f"{SIGNIFICANCE:g} standard errors ({self.stderr[k]:.3g} {self.units[k]}) of 0; "
+                           f"95 % upper bound {self.upper_bound(n):.3g} {self.units[k]}")
+            elif s == UNDETERMINED:
+                out.append(f"{n} is not determined by the data (the output does not depend on it, "
+                           "or the parameters are not separable: JᵀJ is singular)")
+        return out
+
+    # ------------------------------------------------------------------ output
+    def to_dict(self) -> dict:
+        """JSON-ready report; ``NAME`` is null unless the data determine it."""
+        d = dict(model=self.model, output=self.output, method=self.method,
+                 data=getattr(self.data, "source", None), params=list(self.names), free=list(self.free))
+        for k, n in enumerate(self.names):
+            d[n] = self.value(n)
+            d[f"{n}_stderr"] = _num(self.stderr[k]) if self.status[k] != FIXED else None
+            d[f"{n}_status"] = self.status[k]
+            d[f"{n}_identifiable"] = self.identifiable(n)
+            d[f"{n}_identifiability"] = self.identifiability(n)
+            d[f"{n}_unit"] = self.units[k]
+            if self.status[k] == ZERO:
+                d[f"{n}_upper_95"] = self.upper_bound(n)
+        d["init"] = {n: float(v) for n, v in zip(self.names, self.init)}
+        d["raw_estimates"] = {n: float(v) for n, v in zip(self.names, self.estimates)}
+        d["correlation"] = {"params": [n for n in self.names if n in self.free],
+                            "matrix": [[_num(x) for x in row] for row in self.correlation]}
+        d["notes"] = self.notes()
+        d.update(residual_rms=self.residual_rms, n_samples=self.n_samples,
+                 loss_history=[float(x) for x in self.loss_history], iterations=self.iterations,
+                 evaluations=self.evaluations, converged=self.converged, stop_reason=self.stop_reason,
+                 wall_time_s=self.wall_time_s, compile_time_s=self.compile_time_s)
+        return d
+
+    def save_json(self, path) -> dict:
+        d = self.to_dict()
+        Path(path).write_text(json.dumps(d, indent=2))
+        return d
+
+    def summary(self) -> str:
+        """A few lines for the terminal."""
+        head = (f"{self.model or 'model'}: fit of {self.output or 'output'} to "
+                f"{getattr(self.data, 'source', 'data')} ({self.n_samples} samples), {self.method}: "
+                f"{'converged' if self.converged else 'NOT converged'} after {self.iterations} iterations "
+                f"({self.stop_reason}); {self.wall_time_s:.1f} s + {self.compile_time_s:.1f} s compile")
+        lines = [head]
+        width = max(len(n) for n in self.names)
+        for k, n in enumerate(self.names):
+            u = self.units[k]
+            s = self.status[k]
+            if s == DETERMINED:
+                lines.append(f"  {n:<{width}} = {self.estimates[k]:.6g} ± {self.stderr[k]:.2g} {u}")
+            elif s == FIXED:
+                lines.append(f"  {n:<{width}} = {self.estimates[k]:.6g} {u} (fixed)")
+            elif s == ZERO:
+                lines.append(f"  {n:<{width}} : not distinguishable from zero (SE {self.stderr[k]:.2g} {u}); "
+                             f"< {self.upper_bound(n):.3g} {u} at 95 %")
+            else:
+                lines.append(f"  {n:<{width}} : not determined by the data")
+        free = [n for n in self.names if n in self.free]
+        for i, a in enumerate(free):
+            for j in range(i + 1, len(free)):
+                lines.append(f"  correlation({a}, {free[j]}) = {self.correlation[i, j]:+.3f}")
+        lines.append(f"  residual RMS {self.residual_rms:.4g} (loss {self.loss_history[0]:.3g} -> "
+                     f"{self.loss_history[-1]:.3g})")
+        lines += [f"  note: {n}" for n in self.notes()]
+        return "\n".join(lines)
+
+    def figure(self, path=None, *, ylabel: str = "tip y [m]"):
+        """Data, fitted and initial curves, and the residuals (saved if ``path``)."""
+        from ..plotting import _finish, plt
+        fig, (ax, ax2) = plt.subplots(2, 1, figsize=(7.5, 5.2), sharex=True,
+                                      gridspec_kw=dict(height_ratios=[3, 1.3]))
+        d = self.data
+        if d is not None:
+            ax.plot(d.t, d.y, ".", ms=2.0, color="0.55", label=f"data ({len(d)} samples)")
+        init = ", ".join(f"{n} = {v:.3g}" for n, v in zip(self.names, self.init))
+        ax.plot(self.t_grid, self.y_init, "--", color="tab:orange", lw=1.1, label=f"initial ({init})")
+        def label(k, n):
+            if self.status[k] in (DETERMINED, FIXED):
+                return f"{n} = {self.estimates[k]:.4g}"
+            if self.status[k] == ZERO:
+                return f"{n} < {self.upper_bound(n):.3g} (95 %, not identifiable)"
+            return f"{n} not identifiable"
+        fit = ", ".join(label(k, n) for k, n in enumerate(self.names))
+        ax.plot(self.t_grid, self.y_fit, color="tab:blue", lw=1.3, label=f"fitted ({fit})")
+        ax.set_ylabel(ylabel)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        ax.set_title(f"{self.model} {self.output}: residual RMS {self.residual_rms:.3g}", fontsize=10)
+        if d is not None:
+            ax2.plot(d.t, np.interp(d.t, self.t_grid, self.y_fit) - d.y, ".", ms=1.5, color="tab:blue")
+        ax2.axhline(0.0, color="k", lw=0.6)
+        ax2.set_xlabel("time [s]")
+        ax2.set_ylabel("fit − data")
+        ax2.grid(alpha=0.3)
+        return _finish(fig, path)
+
+
+def _num(x) -> Optional[float]:
+    x = float(x)
+    return x if math.isfinite(x) else None
