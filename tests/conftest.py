@@ -15,3 +15,19 @@ def rng():
 
 def pytest_configure(config):
     os.environ.setdefault("ANCF_JAX_QUICK", "1")
+
+
+# ANCF_JAX_TIMING_LOG=FILE appends "cpu_s wall_s nodeid" per test phase (setup/call/
+# teardown) to FILE as the tests run: CPU seconds of the worker process do not depend on
+# how loaded the machine is, so the suite's cost on CI can be estimated on a busy one.
+_TIMING_LOG = os.environ.get("ANCF_JAX_TIMING_LOG")
+
+if _TIMING_LOG:
+    import time
+
+    @pytest.hookimpl(hookwrapper=True)
+    def pytest_runtest_protocol(item, nextitem):
+        c0, w0 = time.process_time(), time.perf_counter()
+        yield
+        with open(_TIMING_LOG, "a") as f:
+            f.write(f"{time.process_time() - c0:.2f} {time.perf_counter() - w0:.2f} {item.nodeid}\n")
