@@ -15,6 +15,16 @@ def rng():
 
 def pytest_configure(config):
     os.environ.setdefault("ANCF_JAX_QUICK", "1")
+    # One persistent compilation cache for the whole run: the xdist workers and the
+    # subprocesses (CLI, notebooks) compile many identical programs (M1 and M2 appear
+    # in the model, CLI, scenario, identification and notebook tests). A clean checkout
+    # starts with an empty cache, so CI pays every distinct compilation once.
+    cache = os.environ.setdefault("JAX_COMPILATION_CACHE_DIR",
+                                  str(config.rootpath / ".jax_cache"))
+    os.environ.setdefault("JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS", "0.5")
+    import jax
+    jax.config.update("jax_compilation_cache_dir", cache)
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.5)
 
 
 # ANCF_JAX_TIMING_LOG=FILE appends "cpu_s wall_s nodeid" per test phase (setup/call/
