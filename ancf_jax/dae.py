@@ -132,7 +132,7 @@ def project_velocity(system: System, q, v, t, factor: SaddleFactor, jac=None):
 
 def project_position(system: System, q, t, *, chain_factor=None, iterations: int = 2, dense=False):
     """Project q onto Φ(q, t) = 0 by ``iterations`` Newton steps of the mass-weighted
-    minimum-norm correction [[M, Φ_qᵀ], [Φ_q, 0]] [Δq; μ] = [0; −Φ]."""
+    minimum-norm correction ``[[M, Φ_qᵀ], [Φ_q, 0]] [Δq; μ] = [0; −Φ]``."""
     if not system.n_constraints:
         return q
     for _ in range(iterations):

@@ -15,11 +15,12 @@ class Carry(eqx.Module):
 
     Attributes:
         t: time [s].
-        q, v: coordinates and velocities, shape (n,).
+        q: coordinates, shape (n,).
+        v: velocities, shape (n,).
         acc: accelerations q̈, shape (n,).
         aux: integrator-specific vector (the generalized-α pseudo-acceleration), shape (n,).
         lam: Lagrange multipliers λ, shape (m,).
-        work: time integrals [dissipated D, external work W_e, constraint work W_c] [J].
+        work: time integrals (dissipated D, external work W_e, constraint work W_c) [J], shape (3,).
         power: their rates at t (:func:`ancf_jax.dae.powers`) [W].
     """
 

@@ -28,7 +28,8 @@ class DiffraxSolver(eqx.Module):
 
     Attributes:
         kind: ``"tsit5"``, ``"dopri5"`` or ``"kvaerno5"``.
-        rtol, atol: step-size controller tolerances.
+        rtol: relative tolerance of the step-size controller.
+        atol: absolute tolerance of the step-size controller.
         max_steps: steps allowed per output chunk.
         baumgarte: Baumgarte ω [rad/s] against constraint drift.
     """
