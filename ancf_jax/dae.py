@@ -31,6 +31,7 @@ from .system import System
 
 
 def border_indices(system: System) -> np.ndarray:
+    """Indices in q of the coordinates outside the beam chain (bodies, sliding coordinates)."""
     return system.border_indices()
 
 

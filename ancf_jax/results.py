@@ -264,6 +264,7 @@ class Results:
                             sliding_names=np.array(self.system.sliding_names), **extra)
 
     def save_summary(self, path: str | Path, **extra) -> dict:
+        """Write :meth:`summary` (and any extra entries) as JSON; returns the dict."""
         data = {**self.summary(), **extra}
         Path(path).write_text(json.dumps(data, indent=2, default=float))
         return data

@@ -51,16 +51,21 @@ class AbstractIntegrator(eqx.Module):
     """
 
     def prepare(self, system):
+        """Quantities computed once per run (e.g. mass factors), passed to every step."""
         return None
 
     def init(self, system, state, context) -> Carry:
+        """The initial :class:`Carry` of a run from ``state`` (consistent accelerations
+        and multipliers)."""
         raise NotImplementedError
 
     def step(self, system, carry: Carry, h, context):
+        """Advance ``carry`` by the step h [s]; returns ``(carry, StepInfo)``."""
         raise NotImplementedError
 
     @property
     def order(self) -> int:
+        """Order of accuracy of the method."""
         raise NotImplementedError
 
 

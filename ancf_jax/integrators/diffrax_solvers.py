@@ -80,4 +80,5 @@ class DiffraxSolver(eqx.Module):
 
 
 def succeeded(solution) -> jnp.ndarray:
+    """Whether a diffrax solution finished successfully (boolean array)."""
     return solution.result == diffrax.RESULTS.successful
