@@ -28,6 +28,7 @@
 # %%
 import os
 import tempfile
+import warnings
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -38,6 +39,11 @@ from ancf_jax.models.m1 import M1, OUTPUTS, RUN, STRESS_ELEMENT, STRESS_FIBRE, S
 from ancf_jax.outputs import evaluate
 from ancf_jax.reports import report_m1
 from ancf_jax.simulation import simulate_batch
+
+# ancf_jax.plotting selects the non-interactive Agg backend (for the command line);
+# in Jupyter, switch back to inline figures:
+# %matplotlib inline
+warnings.filterwarnings("ignore", message="IProgress not found")  # tqdm without ipywidgets
 
 QUICK = os.environ.get("ANCF_JAX_QUICK", "0") == "1"
 T_END = 0.4 if QUICK else RUN["t_end"]      # the paper: 2 s

@@ -29,6 +29,7 @@
 
 # %%
 import os
+import warnings
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -42,6 +43,11 @@ from ancf_jax.models.m2 import M2, OUTPUTS, RUN, m2_initial
 from ancf_jax.outputs import evaluate
 from ancf_jax.reports import report_m2
 from ancf_jax.simulation import simulate_batch
+
+# ancf_jax.plotting selects the non-interactive Agg backend (for the command line);
+# in Jupyter, switch back to inline figures:
+# %matplotlib inline
+warnings.filterwarnings("ignore", message="IProgress not found")  # tqdm without ipywidgets
 
 QUICK = os.environ.get("ANCF_JAX_QUICK", "0") == "1"
 T_END = 0.6 if QUICK else RUN["t_end"]        # MODELS.md: 3 s

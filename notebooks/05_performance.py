@@ -29,6 +29,7 @@
 # %%
 import json
 import os
+import warnings
 from pathlib import Path
 
 import equinox as eqx
@@ -42,6 +43,11 @@ import ancf_jax  # noqa: F401  (turns on float64)
 from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
 from ancf_jax.models.m1 import m1_model
 from ancf_jax.simulation import simulate_batch, trajectory
+
+# ancf_jax.plotting selects the non-interactive Agg backend (for the command line);
+# in Jupyter, switch back to inline figures:
+# %matplotlib inline
+warnings.filterwarnings("ignore", message="IProgress not found")  # tqdm without ipywidgets
 
 QUICK = os.environ.get("ANCF_JAX_QUICK", "0") == "1"
 N = 6                                   # elements

@@ -46,7 +46,7 @@ def test_notebook_runs_in_quick_mode(script, tmp_path, monkeypatch):
     nbclient = pytest.importorskip("nbclient", reason="needs the test extra (nbclient, ipykernel)")
     pytest.importorskip("ipykernel", reason="needs the test extra (ipykernel)")
     monkeypatch.setenv("ANCF_JAX_QUICK", "1")
-    monkeypatch.setenv("MPLBACKEND", "Agg")
+    monkeypatch.delenv("MPLBACKEND", raising=False)  # the kernel's inline backend renders the figures
     # the kernel imports this checkout of ancf_jax, whatever is installed
     monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
     nb = jupytext.read(script)
@@ -61,6 +61,7 @@ def test_notebook_runs_in_quick_mode(script, tmp_path, monkeypatch):
     finally:
         import nbformat
         nbformat.write(nb, tmp_path / script.with_suffix(".ipynb").name)  # executed copy, for debugging
-    errors = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])
-              if o.get("output_type") == "error"]
-    assert not errors
+    outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])]
+    assert not [o for o in outputs if o.get("output_type") == "error"]
+    figures = [o for o in outputs if "image/png" in o.get("data", {})]
+    assert figures, f"{script.name} displayed no figure (is the inline backend selected?)"
