@@ -169,9 +169,16 @@ if not found:
           "    python -m benchmarks.run            # add --quick for a short run\n"
           "    python -m benchmarks.report")
 for path in found:
-    data = json.loads(path.read_text())
-    stamp = data.get("stamp", data)
-    print(f"{path.name:32s} {stamp.get('date', '?'):20s} quick={data.get('quick', '?')!s:5s} "
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError) as err:
+        print(f"{path.name}: unreadable ({err})")
+        continue
+    if not isinstance(data, dict):
+        print(path.name)
+        continue
+    stamp = data.get("stamp", data) if isinstance(data.get("stamp", data), dict) else {}
+    print(f"{path.name:32s} {str(stamp.get('date', '?')):20s} quick={data.get('quick', '?')!s:5s} "
           f"jax {stamp.get('jax', '?')} on {stamp.get('machine', '?')}  ({data.get('command', '')})")
 for png in (sorted(results_dir.glob("*.png")) if found else []):
     print(png.name)
