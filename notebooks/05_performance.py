@@ -108,7 +108,7 @@ def mean_tip_y(p):
 batched = eqx.filter_jit(jax.vmap(jax.value_and_grad(mean_tip_y, has_aux=True)))
 
 alpha0, beta0, delta = 0.02, 1e-5, 2e-4
-alphas = jnp.array([alpha0 - delta, alpha0, alpha0 + delta, 0.5, 2.0, 5.0])
+alphas = jnp.array([alpha0 - delta, alpha0, alpha0 + delta, 5.0, 20.0, 50.0])
 params = jnp.stack([alphas, jnp.full_like(alphas, beta0)], axis=1)
 (values, (histories, status)), grads = batched(params)
 print("status of the members (0 = ok):", np.asarray(status))
