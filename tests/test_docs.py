@@ -23,3 +23,22 @@ def test_mkdocs_build_strict(tmp_path):
     assert proc.returncode == 0, "mkdocs build --strict failed:\n" + "\n".join(
         line for line in log.splitlines() if "WARNING" in line or "ERROR" in line or "Error" in line)
     assert (tmp_path / "site" / "api" / "element" / "index.html").exists()
+
+
+def test_every_module_is_in_the_api_reference():
+    """Each public module of the package has a ``::: module`` entry in docs/api/*.md, so a
+    new module cannot be left out of the reference."""
+    documented = set()
+    for page in (ROOT / "docs" / "api").glob("*.md"):
+        documented |= {line.split()[1] for line in page.read_text(encoding="utf-8").splitlines()
+                       if line.startswith("::: ")}
+    modules = set()
+    for path in (ROOT / "ancf_jax").rglob("*.py"):
+        parts = path.relative_to(ROOT).with_suffix("").parts
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        if any(p.startswith("_") for p in parts):
+            continue
+        modules.add(".".join(parts))
+    missing = sorted(modules - documented)
+    assert not missing, f"add these modules to a page in docs/api/ (and mkdocs.yml nav if new): {missing}"
