@@ -138,8 +138,9 @@ plt.show()
 # * Reverse-mode `jax.grad` needs the run without step-halving retries (the default of
 #   `trajectory`: `RunOptions(max_halvings=0)`); check `loop.status` — a failed member
 #   freezes its state.
-# * `simulate`/`simulate_batch` compile once per structure and reuse the program
-#   in-process (runs of other lengths and steps included).
+# * `simulate`/`simulate_batch` compile once per model structure and reuse the program
+#   in-process for runs of other lengths, and of other steps as long as the number of
+#   steps per output interval stays the same (it is part of the compiled loop).
 # * Parameter identification (fitting α, β, E, … to measured data) builds on this: see
 #   the identification notebook when it is added.
 
