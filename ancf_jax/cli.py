@@ -89,6 +89,7 @@ def _int_list(text: str) -> list[int]:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of ``ancf-jax`` with its subcommands run, static, modal, check."""
     from .simulation import SOLVERS
 
     parser = _Parser(prog="ancf-jax",
@@ -470,6 +471,8 @@ def _fit(args) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``ancf-jax``: parse ``argv`` (default ``sys.argv[1:]``), run the
+    command and return the exit status (0 ok, 1 failed run, 2 bad input)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:

@@ -31,6 +31,7 @@ from .system import System
 
 
 def border_indices(system: System) -> np.ndarray:
+    """Indices in q of the coordinates outside the beam chain (bodies, sliding coordinates)."""
     return system.border_indices()
 
 
@@ -132,7 +133,7 @@ def project_velocity(system: System, q, v, t, factor: SaddleFactor, jac=None):
 
 def project_position(system: System, q, t, *, chain_factor=None, iterations: int = 2, dense=False):
     """Project q onto Φ(q, t) = 0 by ``iterations`` Newton steps of the mass-weighted
-    minimum-norm correction [[M, Φ_qᵀ], [Φ_q, 0]] [Δq; μ] = [0; −Φ]."""
+    minimum-norm correction ``[[M, Φ_qᵀ], [Φ_q, 0]] [Δq; μ] = [0; −Φ]``."""
     if not system.n_constraints:
         return q
     for _ in range(iterations):

@@ -78,7 +78,9 @@ class SpringDamper(AbstractForce):
     """Linear spring-damper between two points: tension k (ℓ − ℓ₀) + c ℓ̇ [N].
 
     Attributes:
-        stiffness: k [N/m]; damping: c [N·s/m]; rest_length: ℓ₀ [m].
+        stiffness: k [N/m].
+        damping: c [N·s/m].
+        rest_length: ℓ₀ [m].
     """
 
     a: AbstractPoint

@@ -58,7 +58,12 @@ class Segment(eqx.Module):
     """Outputs of :func:`integrate_fixed` (leading axis: output intervals).
 
     Attributes:
-        t, q, v, acc, lam, work: the :class:`Carry` at the end of every interval.
+        t: times at the end of every interval [s].
+        q: coordinates at the end of every interval (see :class:`Carry`).
+        v: velocities.
+        acc: accelerations.
+        lam: Lagrange multipliers.
+        work: work integrals [J].
         iterations: Newton iterations in the interval (sum over steps).
         max_iterations: largest Newton iteration count of a step in the interval.
         crossings: node crossings located in the interval.

@@ -31,6 +31,7 @@ class AbstractConstraint(eqx.Module):
         raise NotImplementedError
 
     def equation_labels(self) -> tuple[str, ...]:
+        """One label per equation, ``name[i]``, for messages and output files."""
         return tuple(f"{self.name}[{i}]" for i in range(self.size))
 
 

@@ -71,6 +71,7 @@ class BlockTridiagonal(eqx.Module):
                                 self.upper + other.upper)
 
     def scale(self, c):
+        """The matrix times the scalar c."""
         return BlockTridiagonal(c * self.diagonal, c * self.lower, c * self.upper)
 
     def add_diagonal(self, d):
@@ -80,6 +81,7 @@ class BlockTridiagonal(eqx.Module):
         return BlockTridiagonal(self.diagonal + dd, self.lower, self.upper)
 
     def matvec(self, x):
+        """Product with a vector x of shape (n_blocks · block_size,)."""
         n, b = self.n_blocks, self.block_size
         xb = jnp.reshape(x, (n, b))
         y = jnp.einsum("nij,nj->ni", self.diagonal, xb)
@@ -88,6 +90,7 @@ class BlockTridiagonal(eqx.Module):
         return jnp.reshape(y, (n * b,))
 
     def to_dense(self):
+        """The dense matrix, shape (n_blocks · block_size,) × 2 (for tests and small systems)."""
         n, b = self.n_blocks, self.block_size
         a = jnp.zeros((n, b, n, b))
         idx = jnp.arange(n)
@@ -181,6 +184,7 @@ class SaddleMatrix(eqx.Module):
         return 0 if self.chain is None else self.chain.size
 
     def to_dense(self):
+        """The dense saddle-point matrix (for tests and small systems)."""
         if self.chain is None:
             return self.e
         top = jnp.concatenate([self.chain.to_dense(), self.b], axis=1)

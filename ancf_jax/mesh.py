@@ -221,7 +221,8 @@ def catenary_nodes(start, end, length, n_elements) -> np.ndarray:
     reference is straight.
 
     Args:
-        start, end: end points [m], ``end`` to the right of ``start`` (x₁ > x₀).
+        start: first end point [m], shape (2,).
+        end: second end point [m], shape (2,), to the right of ``start`` (x₁ > x₀).
         length: cable length [m], longer than the chord.
         n_elements: number of elements.
     """

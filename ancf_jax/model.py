@@ -122,7 +122,8 @@ class Model:
             name: unique name.
             mesh: reference (stress-free) geometry, from :mod:`ancf_jax.mesh`.
             section: cross-section and material.
-            alpha, beta: Rayleigh damping coefficients (Eq. 11) [1/s, s], >= 0.
+            alpha: Rayleigh mass-proportional damping coefficient α (Eq. 11) [1/s], >= 0.
+            beta: Rayleigh stiffness-proportional damping coefficient β (Eq. 11) [s], >= 0.
             formulation: strain measures and quadrature (default :class:`Formulation`).
             initial_nodes: initial nodal coordinates (n + 1, 4); default the reference.
             initial_velocities: initial nodal velocities (n + 1, 4); default zero.
@@ -151,8 +152,13 @@ class Model:
         """Add a rigid body (paper Eq. 14: coordinates x, y, θ).
 
         Args:
-            mass: m [kg] > 0; inertia: J about the centre [kg·m²] > 0.
-            position: centre [m]; angle: θ [rad]; velocity [m/s]; angular_velocity [rad/s].
+            name: unique name.
+            mass: m [kg] > 0.
+            inertia: J about the centre [kg·m²] > 0.
+            position: centre (x, y) [m].
+            angle: θ [rad].
+            velocity: centre velocity [m/s], shape (2,).
+            angular_velocity: θ̇ [rad/s].
         """
         m = check_positive(f"mass of body {name!r}", mass, "kg")
         j = check_positive(f"inertia of body {name!r}", inertia, "kg*m^2")

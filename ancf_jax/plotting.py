@@ -83,7 +83,9 @@ def stress_map(t, s, sigma, *, title: str = "", path=None, unit: float = 1e6, la
     """Stress along a beam over time as a colour map (paper Fig. 8).
 
     Args:
-        t: times (N,); s: arc lengths (E, P); sigma: stresses (N, E, P) [Pa].
+        t: times [s], shape (N,).
+        s: arc lengths [m], shape (E, P).
+        sigma: stresses [Pa], shape (N, E, P).
     """
     ss = np.asarray(s).ravel()
     keep = np.isfinite(ss)

@@ -18,6 +18,7 @@ class AbstractPoint(eqx.Module):
     """A point with a position r(q) [m], shape (2,)."""
 
     def position(self, system, q):
+        """Position r(q) [m] of the point, shape (2,), for the system coordinates q (n,)."""
         raise NotImplementedError
 
     def direction(self, system, q):

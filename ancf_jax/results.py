@@ -82,13 +82,18 @@ class Results:
     Attributes:
         system: the simulated system.
         t: output times [s], shape (N,).
-        q, v, acc: coordinates, velocities, accelerations, shape (N, n).
+        q: coordinates, shape (N, n) [m, -, rad, m for sliding coordinates].
+        v: velocities, shape (N, n).
+        acc: accelerations, shape (N, n).
         lam: Lagrange multipliers λ, shape (N, m) (constraint force −Φ_qᵀ λ).
         work: [dissipated, external work, constraint work] integrals [J], shape (N, 3).
         iterations: Newton iterations in each output interval, shape (N,).
-        solver: solver name; dt: step [s] (initial step for adaptive solvers).
-        wall_time_s: run time without compilation; compile_time_s: compilation.
-        status: ``"ok"`` or the failure reason; failure_time: when it failed [s].
+        solver: solver name.
+        dt: step [s] (initial step for adaptive solvers).
+        wall_time_s: run time without compilation [s].
+        compile_time_s: compilation time [s].
+        status: ``"ok"`` or the failure reason.
+        failure_time: when it failed [s] (None when ok).
         message: the failure message (empty when ok).
         info: further solver statistics.
     """
@@ -259,6 +264,7 @@ class Results:
                             sliding_names=np.array(self.system.sliding_names), **extra)
 
     def save_summary(self, path: str | Path, **extra) -> dict:
+        """Write :meth:`summary` (and any extra entries) as JSON; returns the dict."""
         data = {**self.summary(), **extra}
         Path(path).write_text(json.dumps(data, indent=2, default=float))
         return data

@@ -63,6 +63,7 @@ def make_solver(name: str, **options):
 
 
 def solver_name(solver) -> str:
+    """The name of a solver instance (inverse of :func:`make_solver`)."""
     if isinstance(solver, GeneralizedAlpha):
         return "generalized-alpha"
     if isinstance(solver, RK4):

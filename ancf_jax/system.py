@@ -69,9 +69,11 @@ class System(eqx.Module):
         return self.bodies.count
 
     def body_offset(self, k: int) -> int:
+        """Index in q of the x coordinate of body k (its pose is q[o:o + 3] = x, y, θ)."""
         return 3 * k
 
     def beam_offset(self, b: int) -> int:
+        """Index in q of the first coordinate of beam b (4 per node, padding included)."""
         return 3 * self.n_bodies + sum(beam.n_coordinates for beam in self.beams[:b])
 
     @property
@@ -97,9 +99,11 @@ class System(eqx.Module):
                                np.arange(self.sliding_offset, self.n_coordinates)]).astype(int)
 
     def chain_slice(self) -> slice:
+        """Slice of q holding all beam coordinates (the block-tridiagonal part)."""
         return slice(3 * self.n_bodies, self.sliding_offset)
 
     def constraint_labels(self) -> tuple[str, ...]:
+        """One label per constraint equation, ``joint[i]``, in the order of λ."""
         return tuple(lbl for c in self.constraints for lbl in c.equation_labels())
 
     def constraint_owner(self) -> tuple[str, ...]:

@@ -105,8 +105,10 @@ def axial_strain(e, e_ref, x, length, measure="green_lagrange"):
     """Axial strain ε at reference arc length x (dimensionless).
 
     Args:
-        e, e_ref: current and stress-free reference element coordinates, shape (8,).
-        x: local reference arc length [m]; length: element length l [m].
+        e: current element coordinates, shape (8,) [m, -].
+        e_ref: stress-free reference element coordinates, shape (8,) [m, -].
+        x: local reference arc length [m].
+        length: element length l [m].
         measure: ``"green_lagrange"`` or ``"engineering"``.
     """
     r1 = slope(e, x, length)

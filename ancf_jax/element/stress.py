@@ -29,8 +29,10 @@ def bending_stress(e, e_ref, x, length, youngs_modulus, y, measure="exact"):
     """Signed bending stress σ [Pa] at local x [m] on the fibre at distance y [m] (Eq. 18).
 
     Args:
-        e, e_ref: current and reference element coordinates, shape (8,).
-        x: local reference arc length [m]; length: element length [m].
+        e: current element coordinates, shape (8,) [m, -].
+        e_ref: stress-free reference element coordinates, shape (8,) [m, -].
+        x: local reference arc length [m].
+        length: element length l [m].
         youngs_modulus: E [Pa].
         y: fibre distance from the centre line along the left normal [m].
         measure: ``"exact"`` (Eq. 16) or ``"small_strain"`` (Eq. 17), or ``"material"``.

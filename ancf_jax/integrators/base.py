@@ -15,11 +15,12 @@ class Carry(eqx.Module):
 
     Attributes:
         t: time [s].
-        q, v: coordinates and velocities, shape (n,).
+        q: coordinates, shape (n,).
+        v: velocities, shape (n,).
         acc: accelerations q̈, shape (n,).
         aux: integrator-specific vector (the generalized-α pseudo-acceleration), shape (n,).
         lam: Lagrange multipliers λ, shape (m,).
-        work: time integrals [dissipated D, external work W_e, constraint work W_c] [J].
+        work: time integrals (dissipated D, external work W_e, constraint work W_c) [J], shape (3,).
         power: their rates at t (:func:`ancf_jax.dae.powers`) [W].
     """
 
@@ -50,16 +51,21 @@ class AbstractIntegrator(eqx.Module):
     """
 
     def prepare(self, system):
+        """Quantities computed once per run (e.g. mass factors), passed to every step."""
         return None
 
     def init(self, system, state, context) -> Carry:
+        """The initial :class:`Carry` of a run from ``state`` (consistent accelerations
+        and multipliers)."""
         raise NotImplementedError
 
     def step(self, system, carry: Carry, h, context):
+        """Advance ``carry`` by the step h [s]; returns ``(carry, StepInfo)``."""
         raise NotImplementedError
 
     @property
     def order(self) -> int:
+        """Order of accuracy of the method."""
         raise NotImplementedError
 
 

@@ -28,7 +28,8 @@ class DiffraxSolver(eqx.Module):
 
     Attributes:
         kind: ``"tsit5"``, ``"dopri5"`` or ``"kvaerno5"``.
-        rtol, atol: step-size controller tolerances.
+        rtol: relative tolerance of the step-size controller.
+        atol: absolute tolerance of the step-size controller.
         max_steps: steps allowed per output chunk.
         baumgarte: Baumgarte ω [rad/s] against constraint drift.
     """
@@ -79,4 +80,5 @@ class DiffraxSolver(eqx.Module):
 
 
 def succeeded(solution) -> jnp.ndarray:
+    """Whether a diffrax solution finished successfully (boolean array)."""
     return solution.result == diffrax.RESULTS.successful

@@ -117,6 +117,8 @@ def splice(page: str) -> str:
 
 
 def main(argv=None) -> int:
+    """Regenerate the key tables of a scenario-format page in place (default
+    ``docs/scenario-format.md``)."""
     args = sys.argv[1:] if argv is None else argv
     path = Path(args[0] if args else "docs/scenario-format.md")
     path.write_text(splice(path.read_text(encoding="utf-8")), encoding="utf-8")

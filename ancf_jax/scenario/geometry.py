@@ -39,6 +39,7 @@ def hermite_length(p0, t0, p1, t1) -> float:
 
 
 def unit_slopes(slopes) -> np.ndarray:
+    """Slope vectors, shape (k, 2), normalized to unit length."""
     t = np.asarray(slopes, float)
     return t / np.linalg.norm(t, axis=1, keepdims=True)
 

@@ -29,7 +29,9 @@ class RunSettings:
 
     Attributes:
         solver: solver name (one of :data:`ancf_jax.simulation.SOLVERS`).
-        dt: step [s]; t_end: end time [s]; output_dt: sample interval [s] (None: every step).
+        dt: step [s].
+        t_end: end time [s].
+        output_dt: sample interval [s] (None: every step).
         solver_options: options passed to the solver (only those given in the file).
         drift_tolerance: stop when max|Φ| exceeds this [m].
         locate_crossings: split steps at node crossings of sliding joints.
