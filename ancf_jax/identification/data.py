@@ -115,7 +115,7 @@ class Measurements:
         return out
 
     def check_span(self, t0: float, t_end: float) -> None:
-        """Every sample time must lie in the simulated span [t0, t_end] [s]."""
+        """Every sample time t [s] must lie in the simulated span, t0 ≤ t ≤ t_end."""
         tol = 1e-9 * max(1.0, abs(t_end))
         early = np.nonzero(self.t < t0 - tol)[0]
         if early.size:

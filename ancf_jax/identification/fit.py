@@ -319,7 +319,9 @@ def fit(problem: Problem, data: Measurements, init: dict | Sequence[float] | Non
         window: (t_start, t_end) [s]: fit only the samples in this time window.
         method: ``"lm"`` (Levenberg–Marquardt, default) or ``"adam"`` (optax).
         max_iterations: default 50 (LM) or 500 (adam).
-        xtol, ftol, gtol: stopping tolerances (module docstring).
+        xtol: stopping tolerance on the change of the log-parameters θ (module docstring).
+        ftol: stopping tolerance on the relative loss decrease (module docstring).
+        gtol: stopping tolerance on |cos| between Jacobian columns and residuals (module docstring).
         learning_rate: Adam's step in log-parameters.
         optimizer: any optax GradientTransformation (overrides ``method``).
         progress: True prints one line per iteration to stderr; a callable receives them.
