@@ -13,9 +13,11 @@ import json
 import math
 from pathlib import Path
 
-from .common import RESULTS, table
+from . import common
+from .common import table
 
 OUT = Path(__file__).resolve().parent / "RESULTS.md"
+DEFAULT_RESULTS = Path(__file__).resolve().parent / "results"
 SECTIONS = ("agreement", "single_run", "batch", "gradient", "scaling", "work_precision", "compile_time")
 
 #: the issue's targets: (key, description, limit)
@@ -364,7 +366,12 @@ def sec_compile(d):
     return "".join(out)
 
 
-def render(results: Path = RESULTS, out: Path = OUT) -> Path:
+def render(results: Path | None = None, out: Path | None = None) -> Path:
+    """Write RESULTS.md (default: benchmarks/RESULTS.md, or RESULTS.md inside a
+    redirected results folder) and the plots from the JSON files in ``results``."""
+    results = Path(results or common.RESULTS)
+    if out is None:
+        out = OUT if results.resolve() == DEFAULT_RESULTS.resolve() else results / "RESULTS.md"
     data = load(results)
     plots = _plots(data, results) if data else {}
     parts = ["# ancf_jax ↔ Exudyn benchmarks\n\n",
@@ -398,8 +405,8 @@ def render(results: Path = RESULTS, out: Path = OUT) -> Path:
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--results", type=Path, default=RESULTS)
-    ap.add_argument("--out", type=Path, default=OUT)
+    ap.add_argument("--results", type=Path, default=None)
+    ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args(argv)
     print(render(args.results, args.out))
 
