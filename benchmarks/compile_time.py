@@ -33,6 +33,8 @@ def child(which: str) -> dict:
         t0 = time.perf_counter()
         r = simulate(system, state, t_end=0.05, dt=1e-3, progress=False)
         return dict(compile_s=r.compile_time_s, first_call_s=time.perf_counter() - t0, status=r.status)
+    if which == "M1-parts":
+        return _m1_parts()
     from ancf_jax.simulation import simulate_batch
     built = [C.m2(n, pad_to=max(M2_COUNTS)) for n in M2_COUNTS]
     opts = C.ancf_settings("M2")
@@ -41,6 +43,36 @@ def child(which: str) -> dict:
                         solver_options=opts, on_failure="return", progress=False)
     return dict(compile_s=rs[0].compile_time_s, first_call_s=time.perf_counter() - t0,
                 status=[r.status for r in rs], solver_options=opts)
+
+
+def _m1_parts() -> dict:
+    """Where M1's compile time goes: tracing + lowering vs XLA compilation, for the
+    initial-state program and the 500-step chunk program (as ``simulate`` builds them)."""
+    import jax.numpy as jnp
+
+    from ancf_jax import simulation as S
+    from ancf_jax.integrate import RunOptions
+
+    from . import cases as C
+    system, state = C.m1(6)
+    solver = S.make_solver("generalized-alpha")
+    out = {}
+    t0 = time.perf_counter()
+    low = S._init_single.lower(system, state, solver)
+    t1 = time.perf_counter()
+    init = low.compile()
+    t2 = time.perf_counter()
+    out["init_lower_s"], out["init_xla_s"] = t1 - t0, t2 - t1
+    loop, ctx = init(system, state, solver)
+    args = (system, loop, ctx, solver, jnp.asarray(1e-3), jnp.asarray(0.05), S.STEPS_PER_CHUNK, 1,
+            RunOptions(max_halvings=6))
+    t0 = time.perf_counter()
+    low = S._chunk_single.lower(*args)
+    t1 = time.perf_counter()
+    low.compile()
+    t2 = time.perf_counter()
+    out["chunk_lower_s"], out["chunk_xla_s"] = t1 - t0, t2 - t1
+    return out
 
 
 def measure(which: str) -> dict:
@@ -66,6 +98,8 @@ def main(argv=None, *, quick=None, exudyn=None):
     quick = args.quick if quick is None else quick
     m1 = measure("M1")
     print(f"compile M1: {m1['compile_s']:.1f} s (first call {m1['first_call_s']:.1f} s)", flush=True)
+    m1["parts"] = measure("M1-parts")
+    print(f"  M1 parts: {m1['parts']}", flush=True)
     m2 = measure("M2")
     print(f"compile M2 batch {M2_COUNTS}: {m2['compile_s']:.1f} s (first call {m2['first_call_s']:.1f} s)",
           flush=True)

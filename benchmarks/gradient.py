@@ -62,6 +62,15 @@ def make_loss(system, state, solver, t_end, dt):
     return loss, tip
 
 
+def _status(system, state, solver, t_end, dt, theta):
+    import equinox as eqx
+
+    from ancf_jax.simulation import trajectory
+    s = eqx.tree_at(lambda s: (s.beams[0].alpha, s.beams[0].beta), system, (theta[0], theta[1]))
+    _, loop = trajectory(s, state, solver, t_end=t_end, dt=dt, output_dt=None)
+    return loop.status
+
+
 def _timed(fn, *args, reps):
     out, times = None, []
     for _ in range(reps):
@@ -88,8 +97,21 @@ def main(argv=None, *, quick=None, exudyn=None):
     a = settings["ancf_jax"]
     system, state = C.m1(6)
     solver = make_solver("generalized-alpha", **a["options"])
-    loss, tip = make_loss(system, state, solver, plan["t_end"], a["dt"])
     theta0 = jnp.asarray(THETA0)
+    # ``trajectory`` has no step retries (reverse mode needs max_halvings = 0), unlike
+    # ``simulate``: a Newton failure freezes the state for the rest of the run (and the
+    # loss and its gradient become meaningless). Halve the step until both the truth
+    # and theta0 run through.
+    dt, tried = a["dt"], []
+    while True:
+        loss, tip = make_loss(system, state, solver, plan["t_end"], dt)
+        status = [int(jax.jit(lambda th: _status(system, state, solver, plan["t_end"], dt, th))(jnp.asarray(th)))
+                  for th in (TRUTH, THETA0)]
+        tried.append(dict(dt=dt, status=status))
+        print(f"gradient: trajectory at dt={dt:g}: status {status} (0 = ok)", flush=True)
+        if all(s == 0 for s in status) or dt < 1e-5:
+            break
+        dt /= 2
     y_meas = jax.jit(tip)(jnp.asarray(TRUTH))
 
     t0 = time.perf_counter()
@@ -115,7 +137,8 @@ def main(argv=None, *, quick=None, exudyn=None):
     g_fd, t_fd = _timed(fd, reps=plan["reps"])
     grad, g_fd = np.asarray(grad), np.asarray(g_fd)
     rel = np.abs(grad - g_fd) / np.maximum(np.abs(g_fd), 1e-300)
-    out = dict(section="gradient", quick=quick, exudyn=exudyn, t_end=plan["t_end"], dt=a["dt"],
+    out = dict(section="gradient", quick=quick, exudyn=exudyn, t_end=plan["t_end"], dt=dt, dt_tried=tried,
+               trajectory_ok=all(s == 0 for s in tried[-1]["status"]),
                solver_options=a["options"], settings_source=a["source"], theta0=THETA0, truth=TRUTH,
                loss="mean over output times of (tip Y - y_meas)^2, own loss in benchmarks/gradient.py",
                identification_module_available=identification_loss_available(),

@@ -84,7 +84,12 @@ def targets(data: dict) -> list:
                 ac, ec = a["chosen"], e["chosen"]
                 a_step = a["timing"]["median_run_s"] / max(1, ac["steps"])
                 e_step = e["timing"]["median_run_s"] / max(1, ec["steps"])
-                detail = (f"ancf_jax h = {ac['dt']:g} s, {ac['steps']} steps, "
+                step_ratio = ac["steps"] / max(1, ec["steps"])
+                cost_ratio = a_step / e_step if e_step else float("nan")
+                what = ("per-step cost dominates" if abs(math.log(max(cost_ratio, 1e-300))) >=
+                        abs(math.log(max(step_ratio, 1e-300))) else "the step count dominates")
+                detail = (f"steps ×{step_ratio:.3g}, cost per step ×{cost_ratio:.3g} ({what}): "
+                          f"ancf_jax h = {ac['dt']:g} s, {ac['steps']} steps, "
                           f"{ac['iterations'] / max(1, ac['steps']):.2g} Newton it./step, {ms(a_step)}/step; "
                           f"Exudyn h = {ec['dt']:g} s, {ec['steps']} steps, "
                           f"{ec['iterations'] / max(1, ec['steps']):.2g} it./step, {ms(e_step)}/step")
@@ -107,8 +112,15 @@ def targets(data: dict) -> list:
                  (f"forward {f(g.get('median_forward_s'))} s, value+grad {f(g.get('median_value_and_grad_s'))} s"
                   if g else "not run")))
     c = data.get("compile_time", {})
-    rows.append(("compile_m1", c.get("m1", {}).get("compile_s"),
-                 f"first call {f(c['m1']['first_call_s'])} s" if c.get("m1") else "not run"))
+    detail = "not run"
+    if c.get("m1"):
+        detail = f"first call {f(c['m1']['first_call_s'])} s"
+        parts = c["m1"].get("parts")
+        if parts:
+            detail += (f"; separately: chunk program trace+lower {f(parts['chunk_lower_s'])} s + XLA "
+                       f"{f(parts['chunk_xla_s'])} s, initial-state program {f(parts['init_lower_s'])} s + "
+                       f"{f(parts['init_xla_s'])} s")
+    rows.append(("compile_m1", c.get("m1", {}).get("compile_s"), detail))
     rows.append(("compile_m2", c.get("m2_batch", {}).get("compile_s"),
                  f"first call {f(c['m2_batch']['first_call_s'])} s" if c.get("m2_batch") else "not run"))
     s = data.get("scaling", {})
@@ -207,7 +219,7 @@ def _error_block(d):
 
 
 def sec_agreement(d):
-    out = ["## Agreement before timing\n", _error_block(d)]
+    out = ["## Agreement before timing\n\n", _error_block(d)]
     if _missing(d):
         out.append(f"Exudyn rows: {_missing(d)}.\n")
     rows = [[r["model"], r["n_elements"], r["exudyn_variant"], f"{r['t_compared']:.2f}", r["compared_output"],
@@ -222,7 +234,7 @@ def sec_agreement(d):
 
 
 def sec_single(d):
-    out = ["## Single runs at equal accuracy\n", _error_block(d)]
+    out = ["## Single runs at equal accuracy\n\n", _error_block(d)]
     for r in d.get("rows", []):
         out.append(f"\n### {r['model']}, {r['n_elements']} elements, 0–{r['t_end']:g} s\n\n"
                    f"Tolerance: {r['error_measure']} ≤ {r['tolerance']:g}. Reference: ancf_jax, "
@@ -260,7 +272,7 @@ def sec_single(d):
 
 
 def sec_batch(d, plots):
-    out = ["## Batch throughput (M1 variants)\n", _error_block(d)]
+    out = ["## Batch throughput (M1 variants)\n\n", _error_block(d)]
     if d.get("rows"):
         out.append(f"{d['model']}, {d['parameters']}, 0–{d['t_end']:g} s. ancf_jax: one vmapped program "
                    f"(h = {d['settings']['ancf_jax']['dt']:g} s, {d['settings']['ancf_jax']['source']}); "
@@ -294,11 +306,17 @@ def sec_batch(d, plots):
 
 
 def sec_gradient(d):
-    out = ["## Gradient of the identification loss\n", _error_block(d)]
+    out = ["## Gradient of the identification loss\n\n", _error_block(d)]
     if "median_forward_s" in d:
         out.append(f"Loss: {d['loss']} (`ancf_jax.identification` "
                    f"{'present' if d['identification_module_available'] else 'absent'} when run). "
-                   f"M1, 0–{d['t_end']:g} s, h = {d['dt']:g} s, at (α, β) = {tuple(d['theta0'])}.\n\n")
+                   f"M1, 0–{d['t_end']:g} s, h = {d['dt']:g} s, at (α, β) = {tuple(d['theta0'])}.\n")
+        if d.get("dt_tried"):
+            out.append("`trajectory` has no step retries (reverse mode), so the step is halved from the "
+                       "equal-accuracy one until the runs complete: "
+                       + ", ".join(f"h = {t['dt']:g} s: {'ok' if all(x == 0 for x in t['status']) else 'Newton failure'}"
+                                   for t in d["dt_tried"]) + ".\n")
+        out.append("\n")
         rows = [["forward (loss value)", f(d["compile_forward_s"]), f(d["median_forward_s"]), "1"],
                 ["value + gradient (jax.value_and_grad)", f(d["compile_value_and_grad_s"]),
                  f(d["median_value_and_grad_s"]), f(d["ratio_value_and_grad_to_forward"])],
@@ -319,15 +337,16 @@ def sec_gradient(d):
 
 
 def sec_scaling(d, plots):
-    out = ["## Per-step cost against element count\n", _error_block(d)]
+    out = ["## Per-step cost against element count\n\n", _error_block(d)]
     if d.get("rows"):
         out.append(f"M1, h = {d['dt']:g} s, 0–{d['t_end']:g} s, each code with its default settings.\n\n")
         rows = []
         for r in d["rows"]:
-            row = [r["elements"], ms(r["ancf_jax"]["per_step_s"]), f(r["ancf_jax"]["iterations_per_step"], 2),
-                   f(r["ancf_compile_s"])]
-            row += ([ms(r["exudyn"]["per_step_s"]), f(r["exudyn"]["iterations_per_step"], 2)] if "exudyn" in r
-                    else [_missing(d), ""])
+            st = lambda c: "" if r[c].get("status", "ok") == "ok" else f" ({r[c]['status']})"  # noqa: E731
+            row = [r["elements"], ms(r["ancf_jax"]["per_step_s"]) + st("ancf_jax"),
+                   f(r["ancf_jax"]["iterations_per_step"], 2), f(r["ancf_compile_s"])]
+            row += ([ms(r["exudyn"]["per_step_s"]) + st("exudyn"), f(r["exudyn"]["iterations_per_step"], 2)]
+                    if "exudyn" in r else [_missing(d), ""])
             rows.append(row)
         out.append(table(["elements", "ancf_jax per step", "ancf_jax it./step", "ancf_jax compile [s]",
                           "Exudyn per step", "Exudyn it./step"], rows))
@@ -341,7 +360,7 @@ def sec_scaling(d, plots):
 
 
 def sec_wp(d, plots):
-    out = ["## Work–precision of the ancf_jax solvers\n", _error_block(d)]
+    out = ["## Work–precision of the ancf_jax solvers\n\n", _error_block(d)]
     if d.get("rows"):
         out.append(f"{d['model']}, 0–{d['t_end']:g} s; error: {d['error_measure']}; reference "
                    f"generalized-α h = {d['reference']['dt']:g} s (error estimate "
@@ -356,7 +375,7 @@ def sec_wp(d, plots):
 
 
 def sec_compile(d):
-    out = ["## Compile time (fresh process)\n", _error_block(d)]
+    out = ["## Compile time (fresh process)\n\n", _error_block(d)]
     if d.get("m1"):
         rows = [["M1, 6 elements, simulate", f(d["m1"]["compile_s"]), f(d["m1"]["first_call_s"])],
                 [f"M2 batch {tuple(d['m2_counts'])} padded, simulate_batch", f(d["m2_batch"]["compile_s"]),

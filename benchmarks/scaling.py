@@ -32,6 +32,11 @@ def fit_exponent(counts, costs, n_min=FIT_FROM):
     return float(np.polyfit(x, y, 1)[0])
 
 
+def _ok_costs(rows, code):
+    """Per-step costs of completed runs (a failed run's cost is not fitted)."""
+    return [r[code]["per_step_s"] if r[code]["status"] == "ok" else None for r in rows]
+
+
 def main(argv=None, *, quick=None, exudyn=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true")
@@ -61,10 +66,10 @@ def main(argv=None, *, quick=None, exudyn=None):
     counts = [r["elements"] for r in rows]
     out = dict(section="scaling", quick=quick, exudyn=exudyn, t_end=plan["t_end"], dt=DT, model="M1",
                rows=rows, fit_from=FIT_FROM,
-               exponent=dict(ancf_jax=fit_exponent(counts, [r["ancf_jax"]["per_step_s"] for r in rows])),
+               exponent=dict(ancf_jax=fit_exponent(counts, _ok_costs(rows, "ancf_jax"))),
                command="python -m benchmarks.run" + (" --quick" if quick else "") + " --only scaling")
     if exudyn:
-        out["exponent"]["exudyn"] = fit_exponent(counts, [r["exudyn"]["per_step_s"] for r in rows])
+        out["exponent"]["exudyn"] = fit_exponent(counts, _ok_costs(rows, "exudyn"))
     else:
         out["exudyn_missing"] = C.exudyn_missing_reason()
     return write("scaling", out)
