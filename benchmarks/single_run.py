@@ -22,11 +22,11 @@ from .common import write
 
 FULL = dict(
     M1=dict(n=6, t_end=2.0, dt_ref=1.25e-4, steps=(1e-2, 5e-3, 2.5e-3, 2e-3, 1.25e-3, 1e-3, 5e-4, 2.5e-4)),
-    M2=dict(n=24, t_end=3.0, dt_ref=1.25e-4, steps=(2e-3, 1.25e-3, 1e-3, 5e-4, 2.5e-4, 1.25e-4)),
+    M2=dict(n=24, t_end=3.0, dt_ref=1.25e-4, steps=(1e-2, 5e-3, 2.5e-3, 2e-3, 1.25e-3, 1e-3, 5e-4, 2.5e-4, 1.25e-4)),
 )
 QUICK = dict(
-    M1=dict(n=6, t_end=0.5, dt_ref=2.5e-4, steps=(5e-3, 2.5e-3, 1.25e-3, 1e-3, 5e-4)),
-    M2=dict(n=24, t_end=0.3, dt_ref=2.5e-4, steps=(2e-3, 1e-3, 5e-4)),
+    M1=dict(n=6, t_end=0.5, dt_ref=2.5e-4, steps=(1e-2, 5e-3, 2.5e-3, 1.25e-3, 1e-3, 5e-4)),
+    M2=dict(n=24, t_end=0.3, dt_ref=2.5e-4, steps=(5e-3, 2e-3, 1e-3, 5e-4)),
 )
 #: reference solver: tight full Newton
 REFERENCE = dict(newton_tol=1e-11, refresh_every=1, max_iterations=50, rho_inf=0.9)
