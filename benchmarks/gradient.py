@@ -105,8 +105,8 @@ def main(argv=None, *, quick=None, exudyn=None):
     dt, tried = a["dt"], []
     while True:
         loss, tip = make_loss(system, state, solver, plan["t_end"], dt)
-        status = [int(jax.jit(lambda th: _status(system, state, solver, plan["t_end"], dt, th))(jnp.asarray(th)))
-                  for th in (TRUTH, THETA0)]
+        status_of = jax.jit(lambda th, dt=dt: _status(system, state, solver, plan["t_end"], dt, th))
+        status = [int(status_of(jnp.asarray(th))) for th in (TRUTH, THETA0)]  # one compilation
         tried.append(dict(dt=dt, status=status))
         print(f"gradient: trajectory at dt={dt:g}: status {status} (0 = ok)", flush=True)
         if all(s == 0 for s in status) or dt < 1e-5:
