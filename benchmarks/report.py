@@ -344,12 +344,14 @@ def sec_scaling(d, plots):
         for r in d["rows"]:
             st = lambda c: "" if r[c].get("status", "ok") == "ok" else f" ({r[c]['status']})"  # noqa: E731
             row = [r["elements"], ms(r["ancf_jax"]["per_step_s"]) + st("ancf_jax"),
-                   f(r["ancf_jax"]["iterations_per_step"], 2), f(r["ancf_compile_s"])]
-            row += ([ms(r["exudyn"]["per_step_s"]) + st("exudyn"), f(r["exudyn"]["iterations_per_step"], 2)]
-                    if "exudyn" in r else [_missing(d), ""])
+                   f(r["ancf_jax"]["iterations_per_step"], 2),
+                   f(r["ancf_compile_s"]) if r["ancf_compile_s"] > 0 else "cached (earlier section)"]
+            row += ([ms(r["exudyn"]["per_step_s"]) + st("exudyn"), f(r["exudyn"]["iterations_per_step"], 2),
+                     r.get("exudyn_newton", "modified")]
+                    if "exudyn" in r else [_missing(d), "", ""])
             rows.append(row)
         out.append(table(["elements", "ancf_jax per step", "ancf_jax it./step", "ancf_jax compile [s]",
-                          "Exudyn per step", "Exudyn it./step"], rows))
+                          "Exudyn per step", "Exudyn it./step", "Exudyn Newton"], rows))
         ex = d.get("exponent", {})
         out.append(f"\nFitted exponent (n ≥ {d['fit_from']}): ancf_jax {f(ex.get('ancf_jax'))}, "
                    f"Exudyn {f(ex.get('exudyn')) if 'exudyn' in ex else _missing(d)}.\n")
