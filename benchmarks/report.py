@@ -368,7 +368,8 @@ def sec_wp(d, plots):
                    f"generalized-α h = {d['reference']['dt']:g} s (error estimate "
                    f"{f(d['reference']['error_estimate'])} m).\n\n")
         rows = [[r["solver"], f"h = {r['dt']:g} s" if "dt" in r else f"rtol = {r['rtol']:g}", r["status"],
-                 f(r["error"]), f(r["run_s"]), r["steps"], f(r["compile_s"])] for r in d["rows"]]
+                 f(r["error"]), f(r["run_s"]), r["steps"],
+                 f(r["compile_s"]) if r["compile_s"] > 0 else "cached"] for r in d["rows"]]
         out.append(table(["solver", "setting", "status", "error [m]", "run [s]", "steps", "compile [s]"], rows))
         if "work_precision" in plots:
             out.append(f"\n![work-precision]({plots['work_precision']})\n")
