@@ -55,13 +55,13 @@ def main(argv=None, *, quick=None, exudyn=None):
     for solver in SOLVERS:
         for point in plan["sweeps"].get(solver, []):
             if "dt" in point:
-                r = C.run_ancf("M1", system, state, t_end=t_end, dt=point["dt"], solver=solver)
-                r2 = C.run_ancf("M1", system, state, t_end=t_end, dt=point["dt"], solver=solver)
+                kw = dict(t_end=t_end, dt=point["dt"], solver=solver)
             else:
                 opts = dict(rtol=point["rtol"], atol=point["rtol"] * 1e-2)
                 kw = dict(t_end=t_end, dt=1e-6, solver=solver, options=opts, output_dt=C.GRID)
-                r = C.run_ancf("M1", system, state, **kw)
-                r2 = C.run_ancf("M1", system, state, **kw)
+            r = C.run_ancf("M1", system, state, **kw)
+            # the run time excludes compilation; short runs are repeated for a clean time
+            r2 = C.run_ancf("M1", system, state, **kw) if r.run_s < 5.0 else r
             err = C.error("M1", r2.t, r2.y, ref.t, ref.y) if r2.status == "ok" else float("inf")
             rows.append(dict(solver=solver, **point, status=r2.status, error=err, run_s=r2.run_s,
                              compile_s=r.setup_s, steps=r2.steps))
