@@ -143,6 +143,8 @@ def _target_table(data):
             verdict = "not measured"
         elif met:
             verdict = "met"
+        elif key == "scaling":
+            verdict = f"missed: p = {value:.3g} > {limit:g}"
         else:
             verdict = f"missed by {value / limit:.3g}×"
         rows.append([desc, f"≤ {limit:g}", f(value), verdict, detail])

@@ -74,7 +74,7 @@ def test_report_renders_from_json_only(tmp_path):
     m2 = next(v for k, v in lines.items() if k.startswith("M2 (24 el.)"))
     assert "| met |" in m1 and "missed by 1.6×" in m2
     assert "missed by 1.5×" in next(v for k, v in lines.items() if k.startswith("compile time of the three"))
-    assert "missed by 1.3×" in next(v for k, v in lines.items() if k.startswith("per-step cost"))
+    assert "missed: p = 1.3 > 1" in next(v for k, v in lines.items() if k.startswith("per-step cost"))
     assert "| met |" in next(v for k, v in lines.items() if k.startswith("value + gradient"))
     assert "not measured" in next(v for k, v in lines.items() if k.startswith("batch of 256"))
     assert "Exudyn disabled" in text and "This section failed" in text and "boom" in text
