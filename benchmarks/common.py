@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import datetime
 import json
+import os
 import platform
 from pathlib import Path
 
-RESULTS = Path(__file__).resolve().parent / "results"
+#: where the sections write their JSON (ANCF_BENCH_RESULTS overrides, e.g. in tests)
+RESULTS = Path(os.environ.get("ANCF_BENCH_RESULTS") or Path(__file__).resolve().parent / "results")
 
 
 def stamp() -> dict:

@@ -1,0 +1,183 @@
+"""Batch throughput: many M1 variants (α, E) in one vmapped ancf_jax program against
+Exudyn run serially and with a multiprocessing pool on all cores.
+
+Variants: M1 with 6 elements, α uniform in [0.01, 0.05] 1/s and E uniform in
+[180, 220] GPa (seeded). Each code runs with its equal-accuracy settings from
+``results/single_run.json`` when that exists (else h = 1 ms, default tolerances). s₀ is
+an M2 parameter (a static solve per variant) and is not varied here.
+
+Per batch size: ancf_jax compile time (once per size) and the median over ``reps`` of
+the batch run time, and per-simulation cost = batch time / size; Exudyn serial
+(model build + run, per simulation, measured on up to ``serial_cap`` variants and
+extrapolated beyond, flagged) and pool (``Pool(cpu_count)``, spawn; pool start-up
+reported separately, batch wall time measured).
+
+    python -m benchmarks.batch [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing as mp
+import os
+import time
+
+import numpy as np
+
+from . import cases as C
+from .common import RESULTS, write
+
+FULL = dict(sizes=(1, 8, 64, 256, 1024), t_end=2.0, reps=3, serial_cap=64)
+QUICK = dict(sizes=(1, 8, 64), t_end=0.5, reps=1, serial_cap=8)
+DEFAULT = dict(dt=1e-3, options={})
+
+
+POOL = 1024
+
+
+def variants(n, seed=0):
+    """The first n of one fixed, seeded list of (α, E): every batch size shares its
+    leading members (so the serial Exudyn runs compare with the batch members)."""
+    rng = np.random.default_rng(seed)
+    par = np.column_stack([rng.uniform(0.01, 0.05, max(n, POOL)), rng.uniform(180e9, 220e9, max(n, POOL))])
+    return par[:n]
+
+
+def chosen_settings(quick):
+    """Equal-accuracy settings of both codes from single_run.json (same mode)."""
+    path = RESULTS / "single_run.json"
+    out = dict(ancf_jax={**DEFAULT, "source": "default"},
+               exudyn={**DEFAULT, "options": dict(C.EXUDYN_FAST), "source": "default"})
+    if path.exists():
+        data = json.loads(path.read_text())
+        if bool(data.get("quick")) == bool(quick):
+            for row in data.get("rows", []):
+                if row["model"] != "M1":
+                    continue
+                for code in ("ancf_jax", "exudyn"):
+                    c = row.get(code, {}).get("chosen")
+                    if c:
+                        out[code] = dict(dt=c["dt"], options=c["options"], source="single_run.json")
+    return out
+
+
+def with_parameters(system, alpha, youngs):
+    import equinox as eqx
+    import jax.numpy as jnp
+    return eqx.tree_at(lambda s: (s.beams[0].alpha, s.beams[0].section.youngs_modulus), system,
+                       (jnp.asarray(alpha, float), jnp.asarray(youngs, float)))
+
+
+# ------------------------------------------------------------------ Exudyn workers
+_BASE = {}
+
+
+def _init_worker(t_end, dt, options):
+    import os
+    os.environ.setdefault("JAX_PLATFORMS", "cpu")
+    _BASE["sys"] = C.m1(6)
+    _BASE["run"] = dict(t_end=t_end, dt=dt, options=options, output_dt=C.GRID)
+
+
+def _exudyn_task(params):
+    system, state = _BASE["sys"]
+    r = C.run_exudyn("M1", with_parameters(system, *params), state, **_BASE["run"])
+    return r.run_s, r.setup_s, r.status, float(r.y[-1]) if len(r.y) else float("nan")
+
+
+def _noop(_):
+    return os.getpid()
+
+
+def main(argv=None, *, quick=None, exudyn=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true")
+    args = ap.parse_args(argv or [])
+    quick = args.quick if quick is None else quick
+    exudyn = C.exudyn_available() if exudyn is None else exudyn
+    plan = QUICK if quick else FULL
+    settings = chosen_settings(quick)
+    from ancf_jax.simulation import simulate_batch
+    system, state = C.m1(6)
+    a = settings["ancf_jax"]
+    rows = []
+    final_ancf = {}
+    for n in plan["sizes"]:
+        par = variants(n)
+        systems = [with_parameters(system, al, e) for al, e in par]
+        states = [state] * n
+        # outputs on the 10 ms grid and ONE chunk for the whole run: under vmap the
+        # frozen steps past t_end in a last, partly used 500-step chunk are not skipped
+        # (cond becomes select) and would cost as much as real ones
+        kw = dict(t_end=plan["t_end"], dt=a["dt"], output_dt=C.GRID, solver_options=a["options"],
+                  on_failure="return", progress=False, chunks=1)
+        res = simulate_batch(systems, states, **kw)  # compiles
+        compile_s = res[0].compile_time_s
+        walls = []
+        for _ in range(plan["reps"]):
+            res = simulate_batch(systems, states, **kw)
+            walls.append(res[0].info["batch_wall_time_s"])
+        ok = sum(r.status == "ok" for r in res)
+        final_ancf[n] = [float(C.ancf_output("M1", r)[-1]) for r in res]
+        row = dict(size=n, ancf_jax=dict(compile_s=compile_s, batch_run_s=walls,
+                                         median_batch_run_s=C.median(walls),
+                                         per_simulation_s=C.median(walls) / n, ok=ok))
+        print(f"batch {n}: ancf_jax {C.median(walls):.2f} s ({C.median(walls) / n * 1e3:.1f} ms/sim, "
+              f"compile {compile_s:.1f} s, {ok}/{n} ok)", flush=True)
+        rows.append(row)
+    out = dict(section="batch", quick=quick, exudyn=exudyn, t_end=plan["t_end"], model="M1, 6 elements",
+               parameters="alpha ~ U(0.01, 0.05) 1/s, E ~ U(180, 220) GPa, seed 0",
+               settings=settings, rows=rows,
+               command="python -m benchmarks.run" + (" --quick" if quick else "") + " --only batch")
+    if not exudyn:
+        out["exudyn_missing"] = C.exudyn_missing_reason()
+        return write("batch", out)
+    e = settings["exudyn"]
+    # serial: per-simulation cost on up to serial_cap variants
+    cap = min(plan["serial_cap"], max(plan["sizes"]))
+    par = variants(cap)
+    serial = []
+    for al, ym in par:
+        r = C.run_exudyn("M1", with_parameters(system, al, ym), state, t_end=plan["t_end"], dt=e["dt"],
+                         options=e["options"], output_dt=C.GRID)
+        serial.append((r.run_s, r.setup_s, r.status, float(r.y[-1])))
+    per_run = C.median([s[0] for s in serial])
+    per_total = C.median([s[0] + s[1] for s in serial])
+    n_cmp = min(cap, max(plan["sizes"]))
+    diff = float(np.max(np.abs(np.array(final_ancf[max(plan["sizes"])][:n_cmp]) -
+                               np.array([s[3] for s in serial[:n_cmp]]))))
+    out["exudyn_serial"] = dict(measured=cap, median_run_s=per_run, median_run_plus_build_s=per_total,
+                                ok=sum(s[2] == "ok" for s in serial),
+                                final_tip_y_max_difference_to_ancf_m=diff)
+    print(f"Exudyn serial: {per_run:.3f} s run, {per_total:.3f} s with build per simulation "
+          f"(final tip Y vs ancf_jax batch: max {diff:.2e} m)", flush=True)
+    # pool
+    cores = os.cpu_count() or 1
+    ctx = mp.get_context("spawn")
+    t0 = time.perf_counter()
+    with ctx.Pool(cores, initializer=_init_worker, initargs=(plan["t_end"], e["dt"], e["options"])) as pool:
+        pool.map(_noop, range(cores), chunksize=1)
+        startup = time.perf_counter() - t0
+        for row in rows:
+            n = row["size"]
+            measured = n <= cap
+            serial_total = (sum(s[0] + s[1] for s in serial[:n]) if measured else n * per_total)
+            t1 = time.perf_counter()
+            got = pool.map(_exudyn_task, [tuple(p) for p in variants(n)], chunksize=1)
+            pool_s = time.perf_counter() - t1
+            row["exudyn"] = dict(serial_total_s=serial_total, serial_extrapolated=not measured,
+                                 serial_per_simulation_s=serial_total / n, pool_total_s=pool_s,
+                                 pool_per_simulation_s=pool_s / n, pool_workers=cores,
+                                 pool_ok=sum(g[2] == "ok" for g in got))
+            row["per_simulation_ratio_vs_one_exudyn_run"] = row["ancf_jax"]["per_simulation_s"] / per_run
+            print(f"batch {n}: Exudyn serial {serial_total:.2f} s{' (extrapolated)' if not measured else ''}, "
+                  f"pool {pool_s:.2f} s; ancf_jax per simulation / one Exudyn run = "
+                  f"{row['per_simulation_ratio_vs_one_exudyn_run']:.3f}", flush=True)
+    out["exudyn_pool"] = dict(workers=cores, startup_s=startup, start_method="spawn")
+    return write("batch", out)
+
+
+if __name__ == "__main__":
+    import sys
+    print(main(sys.argv[1:]))

@@ -1,0 +1,442 @@
+"""Render benchmarks/RESULTS.md (and png plots) from benchmarks/results/*.json only.
+
+    python -m benchmarks.report [--results DIR] [--out FILE]
+
+Every number in RESULTS.md comes from a JSON file written by a benchmark section, and
+each table names the command that made it; nothing is rerun here.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+from . import common
+from .common import table
+
+OUT = Path(__file__).resolve().parent / "RESULTS.md"
+DEFAULT_RESULTS = Path(__file__).resolve().parent / "results"
+SECTIONS = ("agreement", "single_run", "batch", "gradient", "scaling", "work_precision", "compile_time")
+
+#: the issue's targets: (key, description, limit)
+TARGETS = (
+    ("m1_single", "M1 (6 el.) single run at equal accuracy, ancf_jax / Exudyn run time", 0.5),
+    ("m2_single", "M2 (24 el.) single run at equal accuracy, ancf_jax / Exudyn run time", 0.5),
+    ("batch_256", "batch of 256 M1 variants: ancf_jax cost per simulation / one Exudyn run", 0.05),
+    ("gradient", "value + gradient w.r.t. (α, β) / one forward run", 3.0),
+    ("compile_m1", "compile time of M1 [s]", 5.0),
+    ("compile_m2", "compile time of the three-mesh M2 batch [s]", 20.0),
+    ("scaling", "per-step cost exponent p (cost ∝ n^p), 24 to 192 elements", 1.0),
+)
+
+
+def load(results: Path) -> dict:
+    out = {}
+    for name in SECTIONS:
+        p = results / f"{name}.json"
+        if p.exists():
+            out[name] = json.loads(p.read_text())
+    return out
+
+
+def f(x, digits=3, unit=""):
+    if x is None:
+        return "–"
+    if isinstance(x, str):
+        return x
+    if not math.isfinite(x):
+        return "∞" if x > 0 else "–"
+    return f"{x:.{digits}g}{unit}"
+
+
+def ms(x):
+    return "–" if x is None else f"{x * 1e3:.3g} ms"
+
+
+def _quick(d):
+    return " (quick)" if d.get("quick") else ""
+
+
+def _source(d):
+    return f"\n_Command: `{d.get('command', '?')}`{_quick(d)}; {d['stamp']['date']}._\n" if "stamp" in d else ""
+
+
+def _missing(d):
+    return d.get("exudyn_missing") or ("" if d.get("exudyn", True) else "Exudyn not available")
+
+
+# ------------------------------------------------------------------ target evaluation
+def targets(data: dict) -> list:
+    """[(key, description, limit, value or None, met or None, detail)]"""
+    rows = []
+    sr = {r["model"]: r for r in data.get("single_run", {}).get("rows", [])}
+    for key, model in (("m1_single", "M1"), ("m2_single", "M2")):
+        r = sr.get(model)
+        value, detail = None, "not run"
+        if r is not None:
+            value = r.get("ratio_run")
+            if value is None:
+                detail = (r.get("exudyn", {}).get("missing") or "no settings within tolerance for one code")
+            else:
+                a, e = r["ancf_jax"], r["exudyn"]
+                ac, ec = a["chosen"], e["chosen"]
+                a_step = a["timing"]["median_run_s"] / max(1, ac["steps"])
+                e_step = e["timing"]["median_run_s"] / max(1, ec["steps"])
+                step_ratio = ac["steps"] / max(1, ec["steps"])
+                cost_ratio = a_step / e_step if e_step else float("nan")
+                what = ("per-step cost dominates" if abs(math.log(max(cost_ratio, 1e-300))) >=
+                        abs(math.log(max(step_ratio, 1e-300))) else "the step count dominates")
+                detail = (f"steps ×{step_ratio:.3g}, cost per step ×{cost_ratio:.3g} ({what}): "
+                          f"ancf_jax h = {ac['dt']:g} s, {ac['steps']} steps, "
+                          f"{ac['iterations'] / max(1, ac['steps']):.2g} Newton it./step, {ms(a_step)}/step; "
+                          f"Exudyn h = {ec['dt']:g} s, {ec['steps']} steps, "
+                          f"{ec['iterations'] / max(1, ec['steps']):.2g} it./step, {ms(e_step)}/step")
+        rows.append((key, value, detail))
+    b = data.get("batch", {})
+    value, detail = None, "not run"
+    if b:
+        rows_b = {r["size"]: r for r in b.get("rows", [])}
+        size = 256 if 256 in rows_b else (max(rows_b) if rows_b else None)
+        if size is not None and "per_simulation_ratio_vs_one_exudyn_run" in rows_b[size]:
+            value = rows_b[size]["per_simulation_ratio_vs_one_exudyn_run"]
+            detail = (f"batch of {size}{' (256 not run in quick mode)' if size != 256 else ''}: "
+                      f"{ms(rows_b[size]['ancf_jax']['per_simulation_s'])} per simulation vs "
+                      f"{ms(b['exudyn_serial']['median_run_s'])} per Exudyn run")
+        else:
+            detail = _missing(b) or "no batch rows"
+    rows.append(("batch_256", value, detail))
+    g = data.get("gradient", {})
+    rows.append(("gradient", g.get("ratio_value_and_grad_to_forward"),
+                 (f"forward {f(g.get('median_forward_s'))} s, value+grad {f(g.get('median_value_and_grad_s'))} s"
+                  if g else "not run")))
+    c = data.get("compile_time", {})
+    detail = "not run"
+    if c.get("m1"):
+        detail = f"first call {f(c['m1']['first_call_s'])} s"
+        parts = c["m1"].get("parts")
+        if parts:
+            detail += (f"; separately: chunk program trace+lower {f(parts['chunk_lower_s'])} s + XLA "
+                       f"{f(parts['chunk_xla_s'])} s, initial-state program {f(parts['init_lower_s'])} s + "
+                       f"{f(parts['init_xla_s'])} s")
+    rows.append(("compile_m1", c.get("m1", {}).get("compile_s"), detail))
+    rows.append(("compile_m2", c.get("m2_batch", {}).get("compile_s"),
+                 f"first call {f(c['m2_batch']['first_call_s'])} s" if c.get("m2_batch") else "not run"))
+    s = data.get("scaling", {})
+    counts = [r["elements"] for r in s.get("rows", [])]
+    detail = (f"fit over {[n for n in counts if n >= s.get('fit_from', 24)]} elements"
+              + (f"; Exudyn p = {f(s['exponent'].get('exudyn'))}" if s.get("exponent", {}).get("exudyn") is not None else "")
+              if s else "not run")
+    rows.append(("scaling", s.get("exponent", {}).get("ancf_jax") if s else None, detail))
+    out = []
+    for (key, desc, limit), (_, value, detail) in zip(TARGETS, rows):
+        met = None if value is None else value <= limit
+        out.append((key, desc, limit, value, met, detail))
+    return out
+
+
+def _target_table(data):
+    rows = []
+    for key, desc, limit, value, met, detail in targets(data):
+        if met is None:
+            verdict = "not measured"
+        elif met:
+            verdict = "met"
+        elif key == "scaling":
+            verdict = f"missed: p = {value:.3g} > {limit:g}"
+        else:
+            verdict = f"missed by {value / limit:.3g}×"
+        rows.append([desc, f"≤ {limit:g}", f(value), verdict, detail])
+    return table(["target", "limit", "measured", "verdict", "what it is made of"], rows)
+
+
+# ------------------------------------------------------------------ plots
+def _plots(data, results: Path) -> dict:
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:  # pragma: no cover
+        return {}
+    made = {}
+    wp = data.get("work_precision")
+    if wp and wp.get("rows"):
+        fig, ax = plt.subplots(figsize=(6, 4))
+        for solver in wp["solvers"]:
+            pts = [(r["run_s"], r["error"]) for r in wp["rows"] if r["solver"] == solver
+                   and r["status"] == "ok" and math.isfinite(r["error"]) and r["error"] > 0]
+            if pts:
+                ax.loglog(*zip(*sorted(pts)), "o-", label=solver)
+        ax.set_xlabel("run time [s]")
+        ax.set_ylabel("max |tip Y − reference| [m]")
+        ax.set_title(f"M1 work–precision, 0–{wp['t_end']:g} s{_quick(wp)}")
+        ax.legend()
+        ax.grid(True, which="both", alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(results / "work_precision.png", dpi=100)
+        plt.close(fig)
+        made["work_precision"] = "results/work_precision.png"
+    sc = data.get("scaling")
+    if sc and sc.get("rows"):
+        fig, ax = plt.subplots(figsize=(6, 4))
+        for code in ("ancf_jax", "exudyn"):
+            pts = [(r["elements"], r[code]["per_step_s"]) for r in sc["rows"] if code in r]
+            if pts:
+                ax.loglog(*zip(*pts), "o-", label=code)
+        ax.set_xlabel("elements")
+        ax.set_ylabel("run time per step [s]")
+        ax.set_title(f"M1 per-step cost{_quick(sc)}")
+        ax.legend()
+        ax.grid(True, which="both", alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(results / "scaling.png", dpi=100)
+        plt.close(fig)
+        made["scaling"] = "results/scaling.png"
+    bt = data.get("batch")
+    if bt and bt.get("rows"):
+        fig, ax = plt.subplots(figsize=(6, 4))
+        sizes = [r["size"] for r in bt["rows"]]
+        ax.loglog(sizes, [r["ancf_jax"]["per_simulation_s"] for r in bt["rows"]], "o-", label="ancf_jax vmap")
+        if all("exudyn" in r for r in bt["rows"]):
+            ax.loglog(sizes, [r["exudyn"]["serial_per_simulation_s"] for r in bt["rows"]], "s--",
+                      label="Exudyn serial")
+            ax.loglog(sizes, [r["exudyn"]["pool_per_simulation_s"] for r in bt["rows"]], "^-",
+                      label="Exudyn pool")
+        ax.set_xlabel("batch size")
+        ax.set_ylabel("wall time per simulation [s]")
+        ax.set_title(f"M1 variants{_quick(bt)}")
+        ax.legend()
+        ax.grid(True, which="both", alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(results / "batch.png", dpi=100)
+        plt.close(fig)
+        made["batch"] = "results/batch.png"
+    return made
+
+
+# ------------------------------------------------------------------ sections
+def _error_block(d):
+    return f"**This section failed:** `{d['error']}`\n" if d.get("error") else ""
+
+
+def sec_agreement(d):
+    out = ["## Agreement before timing\n\n", _error_block(d)]
+    if _missing(d):
+        out.append(f"Exudyn rows: {_missing(d)}.\n")
+    rows = [[r["model"], r["n_elements"], r["exudyn_variant"], f"{r['t_compared']:.2f}", r["compared_output"],
+             f(r["max_distance_m"]), r["ancf"]["status"], r["exudyn"]["status"]] for r in d.get("rows", [])]
+    if rows:
+        out.append("Identical settings in both codes (h = 1 ms, ρ∞ = 0.9, full Newton, tight tolerances); "
+                   "maximum over the compared span of the distance between the codes.\n\n")
+        out.append(table(["model", "elements", "Exudyn", "span [s]", "output", "max difference [m]",
+                          "ancf_jax", "Exudyn"], rows))
+    out.append(_source(d))
+    return "".join(out)
+
+
+def sec_single(d):
+    out = ["## Single runs at equal accuracy\n\n", _error_block(d)]
+    for r in d.get("rows", []):
+        out.append(f"\n### {r['model']}, {r['n_elements']} elements, 0–{r['t_end']:g} s\n\n"
+                   f"Tolerance: {r['error_measure']} ≤ {r['tolerance']:g}. Reference: ancf_jax, "
+                   f"h = {r['reference']['dt']:g} s, full Newton (its error against 2h: "
+                   f"{f(r['reference']['error_estimate'])} m).\n\n")
+        rows = []
+        for code in ("ancf_jax", "exudyn"):
+            c = r.get(code, {})
+            if c.get("missing"):
+                rows.append([code, c["missing"], "", "", "", "", ""])
+                continue
+            ch = c.get("chosen")
+            if not ch:
+                rows.append([code, "no tried setting within tolerance", "", "", "", "", ""])
+                continue
+            t = c["timing"]
+            setup = (f"compile {f(t['compile_s'])} s (once)" if code == "ancf_jax"
+                     else f"build {f(t['median_setup_s'])} s (every run)")
+            rows.append([code, f"h = {ch['dt']:g} s, {ch['options']}", f(ch["error"]), ch["steps"],
+                         ch["iterations"], f"{f(t['median_run_s'])} s ({t['reps']} reps)", setup])
+        out.append(table(["code", "fastest settings within tolerance", "error [m]", "steps", "Newton it.",
+                          "median run time", "setup"], rows))
+        if r.get("ratio_run") is not None:
+            out.append(f"\nancf_jax / Exudyn median run time: **{r['ratio_run']:.3g}**.\n")
+        tried = []
+        for code in ("ancf_jax", "exudyn"):
+            for t in r.get(code, {}).get("tried", []):
+                tried.append([code, f"{t['dt']:g}", t["options"], t["status"], f(t["error"]), f(t["run_s"])])
+        if tried:
+            out.append("\n<details><summary>settings tried</summary>\n\n"
+                       + table(["code", "h [s]", "options", "status", "error [m]", "run [s]"], tried)
+                       + "\n</details>\n")
+    out.append(_source(d))
+    return "".join(out)
+
+
+def sec_batch(d, plots):
+    out = ["## Batch throughput (M1 variants)\n\n", _error_block(d)]
+    if d.get("rows"):
+        out.append(f"{d['model']}, {d['parameters']}, 0–{d['t_end']:g} s. ancf_jax: one vmapped program "
+                   f"(h = {d['settings']['ancf_jax']['dt']:g} s, {d['settings']['ancf_jax']['source']}); "
+                   f"Exudyn: h = {d['settings']['exudyn']['dt']:g} s "
+                   f"({d['settings']['exudyn']['source']}).\n\n")
+        rows = []
+        for r in d["rows"]:
+            a, e = r["ancf_jax"], r.get("exudyn")
+            row = [r["size"], f(a["compile_s"]), f(a["median_batch_run_s"]), ms(a["per_simulation_s"]),
+                   f"{a['ok']}/{r['size']}"]
+            if e:
+                row += [f(e["serial_total_s"]) + (" (extrapolated)" if e["serial_extrapolated"] else ""),
+                        f(e["pool_total_s"]) + f" ({e['pool_workers']} proc.)",
+                        f(r["per_simulation_ratio_vs_one_exudyn_run"])]
+            else:
+                row += [_missing(d), "", ""]
+            rows.append(row)
+        out.append(table(["variants", "ancf_jax compile [s]", "ancf_jax batch run [s]", "per simulation",
+                          "ok", "Exudyn serial [s]", "Exudyn pool [s]", "ancf_jax per sim. / one Exudyn run"],
+                         rows))
+        if d.get("exudyn_serial"):
+            s = d["exudyn_serial"]
+            out.append(f"\nOne Exudyn run: {f(s['median_run_s'])} s (median of {s['measured']}; "
+                       f"{f(s['median_run_plus_build_s'])} s with the model build). Final tip Y of the "
+                       f"serial Exudyn runs vs the ancf_jax batch members: max {f(s['final_tip_y_max_difference_to_ancf_m'])} m. "
+                       f"Pool start-up: {f(d['exudyn_pool']['startup_s'])} s (not included).\n")
+        if "batch" in plots:
+            out.append(f"\n![batch]({plots['batch']})\n")
+    out.append(_source(d))
+    return "".join(out)
+
+
+def sec_gradient(d):
+    out = ["## Gradient of the identification loss\n\n", _error_block(d)]
+    if "median_forward_s" in d:
+        out.append(f"Loss: {d['loss']} (`ancf_jax.identification` "
+                   f"{'present' if d['identification_module_available'] else 'absent'} when run). "
+                   f"M1, 0–{d['t_end']:g} s, h = {d['dt']:g} s, at (α, β) = {tuple(d['theta0'])}.\n")
+        if d.get("dt_tried"):
+            out.append("`trajectory` has no step retries (reverse mode), so the step is halved from the "
+                       "equal-accuracy one until the runs complete: "
+                       + ", ".join(f"h = {t['dt']:g} s: {'ok' if all(x == 0 for x in t['status']) else 'Newton failure'}"
+                                   for t in d["dt_tried"]) + ".\n")
+        out.append("\n")
+        rows = [["forward (loss value)", f(d["compile_forward_s"]), f(d["median_forward_s"]), "1"],
+                ["value + gradient (jax.value_and_grad)", f(d["compile_value_and_grad_s"]),
+                 f(d["median_value_and_grad_s"]), f(d["ratio_value_and_grad_to_forward"])],
+                ["gradient by central differences (4 forward)", "(forward's)", f(d["median_finite_differences_s"]),
+                 f(d["ratio_fd_to_forward"])]]
+        if d.get("exudyn_forward"):
+            e = d["exudyn_forward"]
+            rows.append([f"Exudyn forward run (h = {e['dt']:g} s; {e['note']})", "–",
+                         f(e["median_run_s"]), f(e["median_run_s"] / d["median_forward_s"])])
+        else:
+            rows.append(["Exudyn", _missing(d), "", ""])
+        out.append(table(["what", "compile [s]", "median run [s]", "/ forward"], rows))
+        out.append(f"\nGradient (AD): {[f(g, 6) for g in d['gradient']]}; central differences: "
+                   f"{[f(g, 6) for g in d['gradient_fd']]}; relative difference "
+                   f"{[f(x, 2) for x in d['gradient_rel_difference']]}.\n")
+    out.append(_source(d))
+    return "".join(out)
+
+
+def sec_scaling(d, plots):
+    out = ["## Per-step cost against element count\n\n", _error_block(d)]
+    if d.get("rows"):
+        out.append(f"M1, h = {d['dt']:g} s, 0–{d['t_end']:g} s, each code with its default settings.\n\n")
+        rows = []
+        for r in d["rows"]:
+            st = lambda c: "" if r[c].get("status", "ok") == "ok" else f" ({r[c]['status']})"  # noqa: E731
+            row = [r["elements"], ms(r["ancf_jax"]["per_step_s"]) + st("ancf_jax"),
+                   f(r["ancf_jax"]["iterations_per_step"], 2),
+                   f(r["ancf_compile_s"]) if r["ancf_compile_s"] > 0 else "cached (earlier section)"]
+            row += ([ms(r["exudyn"]["per_step_s"]) + st("exudyn"), f(r["exudyn"]["iterations_per_step"], 2),
+                     r.get("exudyn_newton", "modified")]
+                    if "exudyn" in r else [_missing(d), "", ""])
+            rows.append(row)
+        out.append(table(["elements", "ancf_jax per step", "ancf_jax it./step", "ancf_jax compile [s]",
+                          "Exudyn per step", "Exudyn it./step", "Exudyn Newton"], rows))
+        ex = d.get("exponent", {})
+        out.append(f"\nFitted exponent (n ≥ {d['fit_from']}): ancf_jax {f(ex.get('ancf_jax'))}, "
+                   f"Exudyn {f(ex.get('exudyn')) if 'exudyn' in ex else _missing(d)}.\n")
+        if "scaling" in plots:
+            out.append(f"\n![scaling]({plots['scaling']})\n")
+    out.append(_source(d))
+    return "".join(out)
+
+
+def sec_wp(d, plots):
+    out = ["## Work–precision of the ancf_jax solvers\n\n", _error_block(d)]
+    if d.get("rows"):
+        out.append(f"{d['model']}, 0–{d['t_end']:g} s; error: {d['error_measure']}; reference "
+                   f"generalized-α h = {d['reference']['dt']:g} s (error estimate "
+                   f"{f(d['reference']['error_estimate'])} m).\n\n")
+        floor = 3 * d["reference"]["error_estimate"]
+        out.append(f"Errors below 3× the reference's own error estimate ({f(floor)} m) only say "
+                   "\"at least as accurate as the reference\" (marked ≤).\n\n")
+        rows = [[r["solver"], f"h = {r['dt']:g} s" if "dt" in r else f"rtol = {r['rtol']:g}", r["status"],
+                 ("≤ " if r["error"] < floor else "") + f(r["error"]), f(r["run_s"]), r["steps"],
+                 f(r["compile_s"]) if r["compile_s"] > 0 else "cached"] for r in d["rows"]]
+        out.append(table(["solver", "setting", "status", "error [m]", "run [s]", "steps", "compile [s]"], rows))
+        if "work_precision" in plots:
+            out.append(f"\n![work-precision]({plots['work_precision']})\n")
+    out.append(_source(d))
+    return "".join(out)
+
+
+def sec_compile(d):
+    out = ["## Compile time (fresh process)\n\n", _error_block(d)]
+    if d.get("m1"):
+        rows = [["M1, 6 elements, simulate", f(d["m1"]["compile_s"]), f(d["m1"]["first_call_s"])],
+                [f"M2 batch {tuple(d['m2_counts'])} padded, simulate_batch", f(d["m2_batch"]["compile_s"]),
+                 f(d["m2_batch"]["first_call_s"])]]
+        out.append(table(["program", "compile [s]", "first call incl. compile [s]"], rows))
+    out.append(_source(d))
+    return "".join(out)
+
+
+def render(results: Path | None = None, out: Path | None = None) -> Path:
+    """Write RESULTS.md (default: benchmarks/RESULTS.md, or RESULTS.md inside a
+    redirected results folder) and the plots from the JSON files in ``results``."""
+    results = Path(results or common.RESULTS)
+    if out is None:
+        out = OUT if results.resolve() == DEFAULT_RESULTS.resolve() else results / "RESULTS.md"
+    data = load(results)
+    plots = _plots(data, results) if data else {}
+    parts = ["# ancf_jax ↔ Exudyn benchmarks\n\n",
+             "Generated by `python -m benchmarks.report` from `benchmarks/results/*.json` (written by "
+             "`python -m benchmarks.run`); see `benchmarks/README.md` for what each row means.\n\n"]
+    if not data:
+        parts.append("No results yet: run `python -m benchmarks.run --quick`.\n")
+        out.write_text("".join(parts))
+        return out
+    if any(d.get("quick") for d in data.values()):
+        parts.append("**Quick mode** results are included (marked): small counts, short spans, "
+                     "few repetitions — indicative only.\n\n")
+    stamps = []
+    for name, d in data.items():
+        s = d.get("stamp", {})
+        stamps.append([name, s.get("date", "?"), "quick" if d.get("quick") else "full", s.get("machine", "?"),
+                       s.get("cores", "?"), s.get("jax", "?"), s.get("ancf_jax", "?"),
+                       s.get("exudyn") if d.get("exudyn", True) and s.get("exudyn") else "not used"])
+    parts.append("## Machine, versions, date\n\n" + table(
+        ["section", "date", "mode", "machine", "cores", "jax", "ancf_jax", "Exudyn"], stamps) + "\n")
+    parts.append("## Targets\n\n" + _target_table(data) + "\n")
+    renderers = dict(agreement=sec_agreement, single_run=sec_single, batch=lambda d: sec_batch(d, plots),
+                     gradient=sec_gradient, scaling=lambda d: sec_scaling(d, plots),
+                     work_precision=lambda d: sec_wp(d, plots), compile_time=sec_compile)
+    for name in SECTIONS:
+        if name in data:
+            parts.append(renderers[name](data[name]) + "\n")
+    out.write_text("".join(parts))
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--results", type=Path, default=None)
+    ap.add_argument("--out", type=Path, default=None)
+    args = ap.parse_args(argv)
+    print(render(args.results, args.out))
+
+
+if __name__ == "__main__":
+    main()

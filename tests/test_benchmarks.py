@@ -1,0 +1,116 @@
+"""The benchmark machinery (benchmarks/): report rendering from JSON only, and sections
+running end to end without Exudyn. The benchmarks themselves are not run here."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from benchmarks import common, report
+
+STAMP = dict(date="2026-01-01T00:00:00", machine="test cpu", cores=2, python="3.12", jax="0.0",
+             jax_backend="cpu", diffrax="0", equinox="0", numpy="0", ancf_jax="0.0", exudyn="1.13.6")
+
+
+def _chosen(dt, steps, run_s):
+    return dict(dt=dt, options={}, status="ok", error=1e-4, run_s=run_s, setup_s=0.0, steps=steps,
+                iterations=3 * steps, within=True)
+
+
+def synthetic(tmp_path):
+    """A tiny, made-up result set in the shape the sections write."""
+    def put(name, data):
+        (tmp_path / f"{name}.json").write_text(json.dumps({"stamp": STAMP, "quick": True,
+                                                           "command": f"cmd {name}", **data}))
+    single = []
+    for model, ratio in (("M1", 0.4), ("M2", 0.8)):
+        a, e = _chosen(1e-3, 2000, 0.4), _chosen(1e-3, 2000, 1.0)
+        a["setup_s"] = 3.0
+        single.append(dict(model=model, n_elements=6, t_end=2.0, tolerance=2e-4, error_measure="tip",
+                           reference=dict(dt=1e-4, error_estimate=1e-7),
+                           ancf_jax=dict(tried=[a], chosen=a, timing=dict(reps=3, median_run_s=ratio,
+                                                                         median_setup_s=0.0, compile_s=3.0)),
+                           exudyn=dict(tried=[e], chosen=e, timing=dict(reps=3, median_run_s=1.0,
+                                                                       median_setup_s=0.01, compile_s=None)),
+                           ratio_run=ratio))
+    put("single_run", dict(section="single_run", exudyn=True, rows=single))
+    put("batch", dict(section="batch", exudyn=False, exudyn_missing="Exudyn disabled", t_end=2.0,
+                      model="M1", parameters="alpha, E",
+                      settings=dict(ancf_jax=dict(dt=1e-3, options={}, source="default"),
+                                    exudyn=dict(dt=1e-3, options={}, source="default")),
+                      rows=[dict(size=8, ancf_jax=dict(compile_s=1.0, median_batch_run_s=0.8,
+                                                       per_simulation_s=0.1, ok=8))]))
+    put("gradient", dict(section="gradient", exudyn=False, exudyn_missing="Exudyn disabled", t_end=0.2,
+                         dt=1e-3, theta0=[0.03, 1e-6], loss="own", identification_module_available=False,
+                         compile_forward_s=1.0, compile_value_and_grad_s=2.0, median_forward_s=0.1,
+                         median_value_and_grad_s=0.25, median_finite_differences_s=0.4,
+                         ratio_value_and_grad_to_forward=2.5, ratio_fd_to_forward=4.0,
+                         gradient=[1.0, 2.0], gradient_fd=[1.0, 2.0], gradient_rel_difference=[1e-6, 1e-6]))
+    put("scaling", dict(section="scaling", exudyn=True, t_end=0.1, dt=1e-3, fit_from=24,
+                        exponent=dict(ancf_jax=1.3, exudyn=1.0),
+                        rows=[dict(elements=n, steps=100, ancf_compile_s=1.0,
+                                   ancf_jax=dict(per_step_s=1e-4 * n, iterations_per_step=3.0),
+                                   exudyn=dict(per_step_s=2e-4 * n, iterations_per_step=3.0))
+                              for n in (24, 48)]))
+    put("work_precision", dict(section="work_precision", model="M1", t_end=0.05, error_measure="tip",
+                               reference=dict(dt=1e-5, error_estimate=1e-9), solvers=["generalized-alpha"],
+                               rows=[dict(solver="generalized-alpha", dt=dt, status="ok", error=dt * 0.1,
+                                          run_s=0.01 / dt * 1e-3, steps=int(0.05 / dt), compile_s=1.0)
+                                     for dt in (1e-3, 5e-4)]))
+    put("compile_time", dict(section="compile_time", m1=dict(compile_s=4.0, first_call_s=4.5),
+                             m2_batch=dict(compile_s=30.0, first_call_s=31.0), m2_counts=[12, 18, 24]))
+    put("agreement", dict(section="agreement", exudyn=False, exudyn_missing="Exudyn disabled", rows=[],
+                          error="RuntimeError: boom"))
+
+
+def test_report_renders_from_json_only(tmp_path):
+    synthetic(tmp_path)
+    out = report.render(tmp_path, tmp_path / "RESULTS.md")
+    text = out.read_text()
+    assert "Quick mode" in text and "test cpu" in text
+    lines = {ln.split("|")[1].strip(): ln for ln in text.splitlines() if ln.startswith("| ") and "≤" in ln}
+    m1 = next(v for k, v in lines.items() if k.startswith("M1 (6 el.)"))
+    m2 = next(v for k, v in lines.items() if k.startswith("M2 (24 el.)"))
+    assert "| met |" in m1 and "missed by 1.6×" in m2
+    assert "missed by 1.5×" in next(v for k, v in lines.items() if k.startswith("compile time of the three"))
+    assert "missed: p = 1.3 > 1" in next(v for k, v in lines.items() if k.startswith("per-step cost"))
+    assert "| met |" in next(v for k, v in lines.items() if k.startswith("value + gradient"))
+    assert "not measured" in next(v for k, v in lines.items() if k.startswith("batch of 256"))
+    assert "Exudyn disabled" in text and "This section failed" in text and "boom" in text
+    assert "cmd single_run" in text
+    assert (tmp_path / "work_precision.png").exists() and (tmp_path / "scaling.png").exists()
+    # every section heading present
+    for heading in ("Single runs", "Batch throughput", "Gradient", "Per-step cost", "Work–precision",
+                    "Compile time", "Agreement"):
+        assert heading in text
+
+
+def test_run_without_exudyn_end_to_end(tmp_path, monkeypatch):
+    """run.py with --no-exudyn: the agreement section says Exudyn is missing, the report
+    is rendered (into the redirected results folder)."""
+    from benchmarks import run
+    monkeypatch.setattr(common, "RESULTS", tmp_path)
+    monkeypatch.setenv("ANCF_BENCH_NO_EXUDYN", "0")  # restored after the test (run.main sets it)
+    assert run.main(["--quick", "--only", "agreement", "--no-exudyn"]) == 0
+    data = json.loads((tmp_path / "agreement.json").read_text())
+    assert data["exudyn"] is False and "disabled" in data["exudyn_missing"] and data["quick"] is True
+    text = (tmp_path / "RESULTS.md").read_text()
+    assert "Exudyn rows: Exudyn disabled" in text
+
+
+@pytest.mark.slow
+def test_scaling_section_tiny_without_exudyn(tmp_path, monkeypatch):
+    """One real (tiny) section end to end: M1 with 2 elements, 10 steps (one compilation)."""
+    from benchmarks import scaling
+    monkeypatch.setattr(common, "RESULTS", tmp_path)
+    monkeypatch.setattr(scaling, "QUICK", dict(counts=(2,), t_end=0.01, reps=1))
+    path = scaling.main(quick=True, exudyn=False)
+    data = json.loads(path.read_text())
+    assert [r["elements"] for r in data["rows"]] == [2]
+    row = data["rows"][0]
+    assert row["ancf_jax"]["status"] == "ok" and row["steps"] == 10 and row["ancf_jax"]["per_step_s"] > 0
+    assert "exudyn" not in row and data["exponent"]["ancf_jax"] is None  # one point: no fit
+    assert "not installed" in data["exudyn_missing"] or "disabled" in data["exudyn_missing"]
+    md = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
+    assert "Per-step cost" in md
