@@ -76,10 +76,18 @@ def solver_name(solver) -> str:
 STEPS_PER_CHUNK = 500
 
 
-def _chunking(n_intervals: int, substeps: int, chunks: int | None) -> tuple[int, int]:
+def _chunking(n_intervals: int, substeps: int, chunks: int | None,
+              batched: bool = False) -> tuple[int, int]:
     """(intervals per chunk, number of chunks). By default a chunk is about
-    STEPS_PER_CHUNK steps, so runs of different lengths share one compiled chunk."""
-    if chunks is None:
+    STEPS_PER_CHUNK steps, so runs of different lengths share one compiled chunk.
+
+    Batched runs (``batched``) split the run into equal chunks instead: under vmap the
+    skipped steps after the end of a partly used last chunk still cost a full step
+    (a conditional becomes a select), so there the chunks are sized to the run."""
+    if chunks is None and batched:
+        n_chunks = max(1, int(math.ceil(n_intervals * substeps / STEPS_PER_CHUNK)))
+        per = int(math.ceil(n_intervals / n_chunks))
+    elif chunks is None:
         per = max(1, int(math.ceil(STEPS_PER_CHUNK / substeps)))
     else:
         per = int(math.ceil(n_intervals / max(1, min(int(chunks), n_intervals))))
@@ -87,7 +95,7 @@ def _chunking(n_intervals: int, substeps: int, chunks: int | None) -> tuple[int,
 
 
 def _prepare(t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings,
-             on_failure, chunks, solver_options):
+             on_failure, chunks, solver_options, batched=False):
     """Check the run arguments (before anything is compiled) and derive the solver
     instance, RunOptions, time grid and chunking."""
     if on_failure not in ("raise", "return"):
@@ -100,7 +108,7 @@ def _prepare(t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, ma
         raise ModelError("solver_options apply to solvers given by name")
     options = RunOptions(drift_tolerance=drift_tolerance, locate_crossings=locate_crossings,
                          max_halvings=_halvings(max_halvings))
-    return solver, options, grid, _chunking(grid[0], grid[1], chunks)
+    return solver, options, grid, _chunking(grid[0], grid[1], chunks, batched)
 
 
 def _halvings(value) -> int:
@@ -133,6 +141,13 @@ def trajectory(system: System, state: State, solver, *, t_end: float, dt: float,
 
     ``t_end``, ``dt`` and ``output_dt`` are Python floats (they fix array shapes).
     Fixed-step solvers only.
+
+    There are no retries in substeps here (they are a while loop, which reverse-mode
+    autodiff cannot pass): when a step fails (Newton not converged, NaN, drift), the
+    state is frozen from then on and ``loop.status`` holds the failure code
+    (:data:`~ancf_jax.integrators.base.REASONS`). Check ``loop.status == 0`` before
+    using a value or gradient; a frozen run's gradient is meaningless. Reduce ``dt``
+    if it fails.
     """
     if isinstance(solver, DiffraxSolver):
         raise ModelError("trajectory() runs fixed-step solvers; use simulate() for diffrax solvers")
@@ -380,7 +395,7 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
     dt = 1e-3 if dt is None else dt
     solver, options, (n_int, sub, h, _), (per_chunk, n_chunks) = _prepare(
         t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings, on_failure,
-        chunks, solver_options)
+        chunks, solver_options, batched=True)
     if isinstance(solver, DiffraxSolver):
         raise ModelError("simulate_batch runs fixed-step solvers (generalized-alpha, rk4)")
     t0s = {float(s.t) for s in states}
