@@ -18,7 +18,7 @@ from ancf_jax.integrators.rk4 import RK4
 from .dynamics import curve_motion, observed_orders, run_fixed, track_model, uneven_arc
 
 S0, T_END = 0.35, 1.2  # released 0.85 rad from the bottom: 7 crossings
-STEPS = (0.02, 0.01, 0.005, 0.0025)
+STEPS = (0.02, 0.01, 0.005)  # 0.0025 adds nothing but two compilations (errors below)
 
 
 @pytest.fixture(scope="module")
@@ -44,7 +44,8 @@ def crossing_study():
 
 
 def test_located_crossings_keep_rk4_fourth_order(crossing_study):
-    """Measured errors 1.7e-7, 1.1e-8, 7.1e-10, 4.4e-11 (orders 3.98, 3.95, 4.01)."""
+    """Measured errors 1.7e-7, 1.1e-8, 7.1e-10 (orders 3.98, 3.95; at 2.5 ms 4.4e-11,
+    order 4.01: ``python -m benchmarks.locate_crossings``)."""
     rows = crossing_study[True]
     assert all(r["status"] == 0 for r in rows)
     assert all(r["located"] == r["crossings"] == 7 for r in rows)
@@ -54,9 +55,9 @@ def test_located_crossings_keep_rk4_fourth_order(crossing_study):
 
 def test_unlocated_crossings_lose_the_order(crossing_study):
     """Without locating, each straddled crossing leaves an error of lower order
-    (measured 4.7e-6, 9.9e-7, 1.5e-7, 1.3e-7: 1.7 on average, erratic because it
-    depends on where the nodes fall in the steps); at the finest step it is 3000 times
-    the located error."""
+    (measured 4.7e-6, 9.9e-7, 1.5e-7: 2.5 on average, erratic because it depends on
+    where the nodes fall in the steps; 1.3e-7 at 2.5 ms); at the finest step here it is
+    200 times the located error."""
     plain, located = crossing_study[False], crossing_study[True]
     assert all(r["status"] == 0 and r["located"] == 0 and r["crossings"] == 7 for r in plain)
     errors = np.array([r["error"] for r in plain])
