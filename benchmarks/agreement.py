@@ -14,7 +14,6 @@ shipped (EXUDYN.md: an O(h) term).
 
 from __future__ import annotations
 
-import argparse
 
 from . import cases as C
 from .common import write
@@ -25,11 +24,7 @@ KEY = dict(M1="tip", M2="point1", H1="tip")
 
 
 def main(argv=None, *, quick=None, exudyn=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--quick", action="store_true")
-    args = ap.parse_args(argv or [])
-    quick = args.quick if quick is None else quick
-    exudyn = C.exudyn_available() if exudyn is None else exudyn
+    quick, exudyn = C.section_options(__doc__, argv, quick, exudyn)
     out = dict(section="agreement", quick=quick, exudyn=exudyn,
                command="python -m benchmarks.run" + (" --quick" if quick else "") + " --only agreement")
     if not exudyn:

@@ -17,7 +17,6 @@ reported separately, batch wall time measured).
 
 from __future__ import annotations
 
-import argparse
 import json
 import multiprocessing as mp
 import os
@@ -91,11 +90,7 @@ def _noop(_):
 
 
 def main(argv=None, *, quick=None, exudyn=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--quick", action="store_true")
-    args = ap.parse_args(argv or [])
-    quick = args.quick if quick is None else quick
-    exudyn = C.exudyn_available() if exudyn is None else exudyn
+    quick, exudyn = C.section_options(__doc__, argv, quick, exudyn)
     plan = QUICK if quick else FULL
     settings = chosen_settings(quick)
     from ancf_jax.simulation import simulate_batch

@@ -43,6 +43,18 @@ def exudyn_available() -> bool:
     return True
 
 
+def section_options(doc: str, argv, quick, exudyn) -> tuple[bool, bool]:
+    """(quick, exudyn) of a benchmark section's ``main``: keyword arguments (from
+    ``benchmarks.run``) win over the command line (``--quick``); Exudyn is used when
+    installed unless ``exudyn=False``."""
+    import argparse
+    ap = argparse.ArgumentParser(description=doc.split("\n")[0])
+    ap.add_argument("--quick", action="store_true")
+    args = ap.parse_args(argv or [])
+    quick = args.quick if quick is None else quick
+    return quick, (exudyn_available() if exudyn is None else exudyn)
+
+
 def exudyn_missing_reason() -> str:
     if os.environ.get(NO_EXUDYN_ENV, "") not in ("", "0"):
         return f"Exudyn disabled ({NO_EXUDYN_ENV}=1)"

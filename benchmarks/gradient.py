@@ -18,7 +18,6 @@ gradients (finite differences only) and no stiffness-proportional β for the cab
 
 from __future__ import annotations
 
-import argparse
 import time
 
 import numpy as np
@@ -87,11 +86,7 @@ def main(argv=None, *, quick=None, exudyn=None):
     import jax.numpy as jnp
 
     from ancf_jax.simulation import make_solver
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--quick", action="store_true")
-    args = ap.parse_args(argv or [])
-    quick = args.quick if quick is None else quick
-    exudyn = C.exudyn_available() if exudyn is None else exudyn
+    quick, exudyn = C.section_options(__doc__, argv, quick, exudyn)
     plan = QUICK if quick else FULL
     settings = chosen_settings(quick)
     a = settings["ancf_jax"]

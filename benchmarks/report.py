@@ -152,6 +152,21 @@ def _target_table(data):
 
 
 # ------------------------------------------------------------------ plots
+def _loglog(plt, path: Path, series, xlabel: str, ylabel: str, title: str) -> None:
+    """One log-log figure: ``series`` is a list of (x, y, style, label)."""
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for x, y, style, label in series:
+        ax.loglog(x, y, style, label=label)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend()
+    ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
 def _plots(data, results: Path) -> dict:
     try:
         import matplotlib
@@ -162,55 +177,36 @@ def _plots(data, results: Path) -> dict:
     made = {}
     wp = data.get("work_precision")
     if wp and wp.get("rows"):
-        fig, ax = plt.subplots(figsize=(6, 4))
+        series = []
         for solver in wp["solvers"]:
             pts = [(r["run_s"], r["error"]) for r in wp["rows"] if r["solver"] == solver
                    and r["status"] == "ok" and math.isfinite(r["error"]) and r["error"] > 0]
             if pts:
-                ax.loglog(*zip(*sorted(pts)), "o-", label=solver)
-        ax.set_xlabel("run time [s]")
-        ax.set_ylabel("max |tip Y − reference| [m]")
-        ax.set_title(f"M1 work–precision, 0–{wp['t_end']:g} s{_quick(wp)}")
-        ax.legend()
-        ax.grid(True, which="both", alpha=0.3)
-        fig.tight_layout()
-        fig.savefig(results / "work_precision.png", dpi=100)
-        plt.close(fig)
+                series.append((*zip(*sorted(pts)), "o-", solver))
+        _loglog(plt, results / "work_precision.png", series, "run time [s]",
+                "max |tip Y − reference| [m]", f"M1 work–precision, 0–{wp['t_end']:g} s{_quick(wp)}")
         made["work_precision"] = "results/work_precision.png"
     sc = data.get("scaling")
     if sc and sc.get("rows"):
-        fig, ax = plt.subplots(figsize=(6, 4))
+        series = []
         for code in ("ancf_jax", "exudyn"):
             pts = [(r["elements"], r[code]["per_step_s"]) for r in sc["rows"] if code in r]
             if pts:
-                ax.loglog(*zip(*pts), "o-", label=code)
-        ax.set_xlabel("elements")
-        ax.set_ylabel("run time per step [s]")
-        ax.set_title(f"M1 per-step cost{_quick(sc)}")
-        ax.legend()
-        ax.grid(True, which="both", alpha=0.3)
-        fig.tight_layout()
-        fig.savefig(results / "scaling.png", dpi=100)
-        plt.close(fig)
+                series.append((*zip(*pts), "o-", code))
+        _loglog(plt, results / "scaling.png", series, "elements", "run time per step [s]",
+                f"M1 per-step cost{_quick(sc)}")
         made["scaling"] = "results/scaling.png"
     bt = data.get("batch")
     if bt and bt.get("rows"):
-        fig, ax = plt.subplots(figsize=(6, 4))
         sizes = [r["size"] for r in bt["rows"]]
-        ax.loglog(sizes, [r["ancf_jax"]["per_simulation_s"] for r in bt["rows"]], "o-", label="ancf_jax vmap")
+        series = [(sizes, [r["ancf_jax"]["per_simulation_s"] for r in bt["rows"]], "o-", "ancf_jax vmap")]
         if all("exudyn" in r for r in bt["rows"]):
-            ax.loglog(sizes, [r["exudyn"]["serial_per_simulation_s"] for r in bt["rows"]], "s--",
-                      label="Exudyn serial")
-            ax.loglog(sizes, [r["exudyn"]["pool_per_simulation_s"] for r in bt["rows"]], "^-",
-                      label="Exudyn pool")
-        ax.set_xlabel("batch size")
-        ax.set_ylabel("wall time per simulation [s]")
-        ax.set_title(f"M1 variants{_quick(bt)}")
-        ax.legend()
-        ax.grid(True, which="both", alpha=0.3)
-        fig.tight_layout()
-        fig.savefig(results / "batch.png", dpi=100)
-        plt.close(fig)
+            series += [(sizes, [r["exudyn"]["serial_per_simulation_s"] for r in bt["rows"]], "s--",
+                        "Exudyn serial"),
+                       (sizes, [r["exudyn"]["pool_per_simulation_s"] for r in bt["rows"]], "^-",
+                        "Exudyn pool")]
+        _loglog(plt, results / "batch.png", series, "batch size", "wall time per simulation [s]",
+                f"M1 variants{_quick(bt)}")
         made["batch"] = "results/batch.png"
     return made
 

@@ -12,7 +12,6 @@ growth exponent p of cost ‚àù n^p is fitted by least squares on log-log over n ‚
 
 from __future__ import annotations
 
-import argparse
 
 import numpy as np
 
@@ -39,11 +38,7 @@ def _ok_costs(rows, code):
 
 
 def main(argv=None, *, quick=None, exudyn=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--quick", action="store_true")
-    args = ap.parse_args(argv or [])
-    quick = args.quick if quick is None else quick
-    exudyn = C.exudyn_available() if exudyn is None else exudyn
+    quick, exudyn = C.section_options(__doc__, argv, quick, exudyn)
     plan = QUICK if quick else FULL
     rows = []
     for n in plan["counts"]:
