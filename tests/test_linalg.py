@@ -1,0 +1,54 @@
+"""Structured solvers of ancf_jax.linalg against dense numpy solves."""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from ancf_jax.linalg import (BlockTridiagonal, SaddleMatrix, factor_chain, factor_saddle, lu_factor,
+                             lu_solve, solve_chain, solve_saddle)
+
+
+def _chain(rng, n_blocks=5, b=4):
+    """A random block-diagonally dominant block-tridiagonal matrix."""
+    diag = rng.normal(size=(n_blocks, b, b)) + 8.0 * np.eye(b)
+    return BlockTridiagonal(jnp.asarray(diag), jnp.asarray(rng.normal(size=(n_blocks - 1, b, b))),
+                            jnp.asarray(rng.normal(size=(n_blocks - 1, b, b))))
+
+
+def test_block_thomas_solves_like_dense(rng):
+    t = _chain(rng)
+    r = rng.normal(size=(t.size, 3))
+    x = solve_chain(factor_chain(t), jnp.asarray(r))
+    np.testing.assert_allclose(x, np.linalg.solve(np.asarray(t.to_dense()), r), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(solve_chain(factor_chain(t), jnp.asarray(r[:, 0])), x[:, 0], rtol=1e-14)
+
+
+@pytest.mark.parametrize("dense", [False, True])
+def test_bordered_saddle_solves_like_dense(rng, dense):
+    t = _chain(rng)
+    n_b = 5
+    b = rng.normal(size=(t.size, n_b))
+    e = np.zeros((n_b, n_b))
+    e[:2, :2] = rng.normal(size=(2, 2)) + 4.0 * np.eye(2)  # border coordinates, then multipliers
+    a = SaddleMatrix(t, jnp.asarray(b), jnp.asarray(b.T), jnp.asarray(e))
+    r = rng.normal(size=t.size + n_b)
+    x = solve_saddle(factor_saddle(a, dense=dense), jnp.asarray(r))
+    np.testing.assert_allclose(x, np.linalg.solve(np.asarray(a.to_dense()), r), rtol=1e-10, atol=1e-12)
+
+
+def test_lu_keeps_the_permutation_and_solves_with_pivoting(rng):
+    a = rng.normal(size=(7, 7))
+    a[0, 0] = 0.0  # needs a row exchange
+    rhs = rng.normal(size=(7, 2))
+    f = lu_factor(jnp.asarray(a))
+    np.testing.assert_allclose(lu_solve(f, jnp.asarray(rhs)), np.linalg.solve(a, rhs), rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(lu_solve(f, jnp.asarray(rhs[:, 1])), np.linalg.solve(a, rhs[:, 1]),
+                               rtol=1e-10, atol=1e-12)
+
+
+def test_lu_under_vmap(rng):
+    a = rng.normal(size=(4, 6, 6)) + 3.0 * np.eye(6)
+    rhs = rng.normal(size=(4, 6))
+    x = jax.vmap(lambda m, r: lu_solve(lu_factor(m), r))(jnp.asarray(a), jnp.asarray(rhs))
+    np.testing.assert_allclose(x, np.linalg.solve(a, rhs[..., None])[..., 0], rtol=1e-10, atol=1e-12)
