@@ -310,6 +310,8 @@ class GeneralizedAlphaOptions(Table):
                                        doc="refactor after this many iterations (default 6)")
     contraction: Optional[float] = key(None, gt=0.0, lt=1.0, allow_inf_nan=False,
                                        doc="refactor when a correction shrinks by less (default 0.25)")
+    refresh_first: Optional[bool] = key(None, doc="refactor after the first correction of every step "
+                                                  "(default false; for steps whose predictor is far off)")
     velocity_projection: Optional[bool] = key(None, doc="project velocities onto the constraints (default true)")
     dense: Optional[bool] = key(None, doc="dense LU instead of the block-tridiagonal solver (default false)")
 
