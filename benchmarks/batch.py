@@ -1,10 +1,14 @@
 """Batch throughput: many M1 variants (α, E) in one vmapped ancf_jax program against
-Exudyn run serially and with a multiprocessing pool on all cores.
+Exudyn run serially and with a multiprocessing pool on all cores; and M2 variants of
+the trolley's start s₀ (each its own static equilibrium) against Exudyn run serially.
 
 Variants: M1 with 6 elements, α uniform in [0.01, 0.05] 1/s and E uniform in
 [180, 220] GPa (seeded). Each code runs with its equal-accuracy settings from
-``results/single_run.json`` when that exists (else h = 1 ms, default tolerances). s₀ is
-an M2 parameter (a static solve per variant) and is not varied here.
+``results/single_run.json`` when that exists (else h = 1 ms, default tolerances); the
+vmapped batch always uses the block-tridiagonal solver (``dense`` dropped from the
+chosen options: the same equations, and batched dense LU is slower under vmap).
+M2 s₀ variants: 12 elements, s₀ uniform in [0.4, 1.2] m, h = 1 ms (M2's step), both
+codes from the same static states (solved per variant before the clock starts).
 
 Per batch size: ancf_jax compile time (once per size) and the median over ``reps`` of
 the batch run time, and per-simulation cost = batch time / size; Exudyn serial
@@ -27,8 +31,10 @@ import numpy as np
 from . import cases as C
 from .common import RESULTS, write
 
-FULL = dict(sizes=(1, 8, 64, 256, 1024), t_end=2.0, reps=3, serial_cap=64)
-QUICK = dict(sizes=(1, 8, 64), t_end=0.5, reps=1, serial_cap=8)
+FULL = dict(sizes=(1, 8, 64, 256, 1024), t_end=2.0, reps=3, serial_cap=64,
+            s0=dict(sizes=(1, 8, 32), t_end=0.5, n=12, dt=1e-3))
+QUICK = dict(sizes=(1, 8, 64), t_end=0.5, reps=1, serial_cap=8,
+             s0=dict(sizes=(1, 8), t_end=0.1, n=12, dt=1e-3))
 DEFAULT = dict(dt=1e-3, options={})
 
 
@@ -89,6 +95,45 @@ def _noop(_):
     return os.getpid()
 
 
+def s0_variants(n, seed=1):
+    """The first n of a fixed, seeded list of trolley starts s₀ [m]."""
+    return np.random.default_rng(seed).uniform(0.4, 1.2, max(n, POOL))[:n]
+
+
+def s0_batch(plan, exudyn) -> dict:
+    """M2 variants of s₀: one vmapped ancf_jax program per size against Exudyn serially
+    (each variant's static equilibrium is solved, or read from the cache, untimed)."""
+    from ancf_jax.simulation import simulate_batch
+    opts = C.ancf_settings("M2")
+    built = [C.m2(plan["n"], s0=float(s)) for s in s0_variants(max(plan["sizes"]))]
+    rows = []
+    for n in plan["sizes"]:
+        kw = dict(t_end=plan["t_end"], dt=plan["dt"], output_dt=C.GRID, solver_options=opts,
+                  on_failure="return", progress=False, chunks=1)
+        systems, states = [b[0] for b in built[:n]], [b[1] for b in built[:n]]
+        res = simulate_batch(systems, states, **kw)  # compiles
+        compile_s = res[0].compile_time_s
+        res = simulate_batch(systems, states, **kw)
+        wall = res[0].info["batch_wall_time_s"]
+        row = dict(size=n, ancf_jax=dict(compile_s=compile_s, batch_run_s=wall, per_simulation_s=wall / n,
+                                         ok=sum(r.status == "ok" for r in res)))
+        final = [np.asarray(C.ancf_output("M2", r))[-1] for r in res]
+        if exudyn:
+            ex = [C.run_exudyn("M2", b[0], b[1], t_end=plan["t_end"], dt=plan["dt"], output_dt=C.GRID)
+                  for b in built[:n]]
+            per = C.median([r.run_s for r in ex])
+            row["exudyn"] = dict(serial_total_s=sum(r.run_s + r.setup_s for r in ex), median_run_s=per,
+                                 ok=sum(r.status == "ok" for r in ex),
+                                 final_point1_max_difference_to_ancf_m=float(max(
+                                     np.max(np.abs(np.asarray(r.y)[-1] - f)) for r, f in zip(ex, final))))
+            row["per_simulation_ratio_vs_one_exudyn_run"] = row["ancf_jax"]["per_simulation_s"] / per
+        rows.append(row)
+        print(f"s0 batch {n}: ancf_jax {wall:.2f} s ({wall / n * 1e3:.1f} ms/sim, compile {compile_s:.1f} s)"
+              + (f"; Exudyn {row['exudyn']['median_run_s'] * 1e3:.1f} ms/run" if exudyn else ""), flush=True)
+    return dict(model=f"M2, {plan['n']} elements", parameters="s0 ~ U(0.4, 1.2) m, seed 1",
+                t_end=plan["t_end"], dt=plan["dt"], solver_options=opts, rows=rows)
+
+
 def main(argv=None, *, quick=None, exudyn=None):
     quick, exudyn = C.section_options(__doc__, argv, quick, exudyn)
     plan = QUICK if quick else FULL
@@ -105,7 +150,8 @@ def main(argv=None, *, quick=None, exudyn=None):
         # outputs on the 10 ms grid and ONE chunk for the whole run: under vmap the
         # frozen steps past t_end in a last, partly used 500-step chunk are not skipped
         # (cond becomes select) and would cost as much as real ones
-        kw = dict(t_end=plan["t_end"], dt=a["dt"], output_dt=C.GRID, solver_options=a["options"],
+        options = {k: v for k, v in a["options"].items() if k != "dense"}
+        kw = dict(t_end=plan["t_end"], dt=a["dt"], output_dt=C.GRID, solver_options=options,
                   on_failure="return", progress=False, chunks=1)
         res = simulate_batch(systems, states, **kw)  # compiles
         compile_s = res[0].compile_time_s
@@ -125,6 +171,7 @@ def main(argv=None, *, quick=None, exudyn=None):
                parameters="alpha ~ U(0.01, 0.05) 1/s, E ~ U(180, 220) GPa, seed 0",
                settings=settings, rows=rows,
                command="python -m benchmarks.run" + (" --quick" if quick else "") + " --only batch")
+    out["s0"] = s0_batch(plan["s0"], exudyn)
     if not exudyn:
         out["exudyn_missing"] = C.exudyn_missing_reason()
         return write("batch", out)

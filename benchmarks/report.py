@@ -270,7 +270,7 @@ def sec_single(d):
 
 
 def sec_batch(d, plots):
-    out = ["## Batch throughput (M1 variants)\n\n", _error_block(d)]
+    out = ["## Batch throughput (M1 variants; M2 s₀ variants)\n\n", _error_block(d)]
     if d.get("rows"):
         out.append(f"{d['model']}, {d['parameters']}, 0–{d['t_end']:g} s. ancf_jax: one vmapped program "
                    f"(h = {d['settings']['ancf_jax']['dt']:g} s, {d['settings']['ancf_jax']['source']}); "
@@ -299,7 +299,28 @@ def sec_batch(d, plots):
                        f"Pool start-up: {f(d['exudyn_pool']['startup_s'])} s (not included).\n")
         if "batch" in plots:
             out.append(f"\n![batch]({plots['batch']})\n")
+    if d.get("s0"):
+        out.append(_s0_batch(d["s0"]))
     out.append(_source(d))
+    return "".join(out)
+
+
+def _s0_batch(s):
+    """Table of the M2 s₀ batch (see benchmarks/batch.py)."""
+    out = [f"\n### M2 variants of the trolley start s₀\n\n{s['model']}, {s['parameters']}, "
+           f"0–{s['t_end']:g} s, h = {s['dt']:g} s in both codes (ancf_jax options {s['solver_options']}); "
+           "every variant starts from its own static equilibrium (solved before timing).\n\n"]
+    rows = []
+    for r in s["rows"]:
+        a, e = r["ancf_jax"], r.get("exudyn")
+        rows.append([r["size"], f(a["compile_s"]), f(a["batch_run_s"]), ms(a["per_simulation_s"]),
+                     f"{a['ok']}/{r['size']}",
+                     ms(e["median_run_s"]) if e else "not run", f"{e['ok']}/{r['size']}" if e else "",
+                     f(e["final_point1_max_difference_to_ancf_m"]) if e else "",
+                     f(r["per_simulation_ratio_vs_one_exudyn_run"]) if e else ""])
+    out.append(table(["variants", "ancf_jax compile [s]", "ancf_jax batch run [s]", "per simulation", "ok",
+                      "one Exudyn run", "Exudyn ok", "final point 1 max diff [m]",
+                      "ancf_jax per sim. / one Exudyn run"], rows))
     return "".join(out)
 
 

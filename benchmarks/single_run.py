@@ -2,7 +2,8 @@
 
 For each model: a converged reference (ancf_jax, Exudyn's formulation, full Newton,
 fine step ``dt_ref``; its own error estimated against ``2 dt_ref``); then, for each code,
-the fastest settings (step, Newton tolerances) whose result is within the tolerance of
+the fastest settings (step, Newton tolerances, Newton refresh policy and linear
+solver) whose result is within the tolerance of
 the reference (M1: tip Y within 2e-4 m, M2: point 1 within 2 mm, over the run): for each
 tolerance set the steps are tried from the largest down and the first that passes is
 kept; the fastest of those wins. Then both winners are timed interleaved, ``reps``
@@ -30,8 +31,13 @@ QUICK = dict(
 )
 #: reference solver: tight full Newton
 REFERENCE = dict(newton_tol=1e-11, refresh_every=1, max_iterations=50, rho_inf=0.9)
-#: Newton tolerance sets tried per code (a new ancf_jax set costs one compilation)
-ANCF_TOLS = dict(full=({}, dict(newton_tol=1e-7)), quick=({},))
+#: Newton tolerance and solver option sets tried per code (a new ancf_jax set costs one
+#: compilation)
+#: (refresh_first: refactor after the first correction, for large steps; dense: dense LU,
+#: for small systems; see ancf_jax.integrators.generalized_alpha)
+LARGE_STEP = dict(refresh_first=True, contraction=0.1)
+ANCF_TOLS = dict(full=({}, dict(newton_tol=1e-7), LARGE_STEP, dict(LARGE_STEP, dense=True)),
+                 quick=({}, LARGE_STEP, dict(LARGE_STEP, dense=True)))
 EXUDYN_TOLS = dict(full=(dict(relative_tolerance=1e-8, absolute_tolerance=1e-10),
                          dict(relative_tolerance=1e-5, absolute_tolerance=1e-8)),
                    quick=(dict(relative_tolerance=1e-8, absolute_tolerance=1e-10),))
