@@ -52,7 +52,7 @@ def synthetic(tmp_path):
                         rows=[dict(elements=n, steps=100, ancf_compile_s=1.0,
                                    ancf_jax=dict(per_step_s=1e-4 * n, iterations_per_step=3.0),
                                    exudyn=dict(per_step_s=2e-4 * n, iterations_per_step=3.0))
-                              for n in (24, 48)]))
+                              for n in (24, 48, 96, 192)]))
     put("work_precision", dict(section="work_precision", model="M1", t_end=0.05, error_measure="tip",
                                reference=dict(dt=1e-5, error_estimate=1e-9), solvers=["generalized-alpha"],
                                rows=[dict(solver="generalized-alpha", dt=dt, status="ok", error=dt * 0.1,
@@ -75,6 +75,13 @@ def test_report_renders_from_json_only(tmp_path):
     assert "| met |" in m1 and "missed by 1.6×" in m2
     assert "missed by 1.5×" in next(v for k, v in lines.items() if k.startswith("compile time of the three"))
     assert "missed: p = 1.3 > 1" in next(v for k, v in lines.items() if k.startswith("per-step cost"))
+    # a fit that stops short of 192 elements (quick mode) is not a verdict on the target
+    data = json.loads((tmp_path / "scaling.json").read_text())
+    data["rows"] = data["rows"][:2]
+    (tmp_path / "scaling.json").write_text(json.dumps(data))
+    text = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
+    line = next(ln for ln in text.splitlines() if ln.startswith("| per-step cost"))
+    assert "not measured" in line and "not run up to 192" in line and "p = 1.3" in line
     assert "| met |" in next(v for k, v in lines.items() if k.startswith("value + gradient"))
     assert "not measured" in next(v for k, v in lines.items() if k.startswith("batch of 256"))
     assert "Exudyn disabled" in text and "This section failed" in text and "boom" in text
