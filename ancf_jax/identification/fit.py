@@ -22,7 +22,10 @@ Stopping rule (first that holds, per member):
 * ``ftol``: the accepted step lowers the loss by less than ftol relative;
 * ``gtol``: |cos| between every free Jacobian column and r is below gtol (first-order
   optimality, MINPACK's test);
-* zero residual: the loss fell below 1e-30 of its initial value;
+* zero residual: the loss fell below 1e-30 of its initial value, or a step failed to
+  lower a loss whose RMS residual is below ``ZERO_RESIDUAL`` (1e-12) of the data's RMS
+  value: the simulation reproduces the data to rounding level, and further steps would
+  only chase Newton and rounding noise (noise-free synthetic data);
 * noise floor (LM): no step lowers the loss although the damping has grown to 1e12;
 * ``max_iterations``: not converged.
 
@@ -49,6 +52,8 @@ METHODS = ("lm", "adam")
 DECADES = 10.0
 #: start of a free parameter whose initial value is 0 (e.g. M1's beta = 0)
 ZERO_START = {"alpha": 1e-2, "beta": 1e-5}
+#: RMS residual / RMS data value below which the fit has reproduced the data exactly
+ZERO_RESIDUAL = 1e-12
 
 
 def _progress_line(it: int, cost: np.ndarray, p: np.ndarray, names, active: np.ndarray) -> str:
@@ -162,6 +167,8 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
     members = [_Member(p0[b].copy(), r[b], jac[b], yg[b]) for b in range(B)]
     y_init = yg.copy()
     data_of = (lambda b: datasets[b]) if len(datasets) == B else (lambda b: datasets[0])
+    # loss (weighted mean square, m²) at which the residual is at rounding level
+    zero = [ZERO_RESIDUAL ** 2 * float(np.sum(d.w * d.y ** 2) / np.sum(d.w)) for d in map(data_of, range(B))]
     evaluations = 1
     lo = np.log(np.where(mask, p0, 1.0)) - DECADES * math.log(10)
     if use_optax:
@@ -247,6 +254,8 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
                     m.stop("step below xtol")
                 elif rel <= ftol:
                     m.stop("relative loss decrease below ftol")
+            elif m.cost <= zero[b]:
+                m.stop("zero residual (rounding level)")
             else:
                 m.lam *= m.nu
                 m.nu *= 2.0
