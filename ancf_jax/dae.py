@@ -136,13 +136,15 @@ def project_position(system: System, q, t, *, chain_factor=None, iterations: int
     minimum-norm correction ``[[M, Φ_qᵀ], [Φ_q, 0]] [Δq; μ] = [0; −Φ]``."""
     if not system.n_constraints:
         return q
-    for _ in range(iterations):
+    def newton_step(_, q):
         jac = system.constraint_jacobian(q, t)
         f = mass_saddle_factor(system, jac, chain_factor, dense=dense)
         x = solve_saddle(f, to_solver_order(system, jnp.zeros_like(q), -system.constraint(q, t)))
         dq, _ = from_solver_order(system, x)
-        q = q + dq
-    return q
+        return q + dq
+
+    # a loop, not unrolled: one traced copy of the Jacobian and the factorization
+    return jax.lax.fori_loop(0, iterations, newton_step, q)
 
 
 def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac) -> SaddleMatrix:

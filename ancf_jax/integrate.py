@@ -142,36 +142,41 @@ def _crossing(system, integrator, carry, new, h, context, options):
     def branch():
         tgt = target[first]
 
-        def f(theta):
-            c, _ = integrator.step(system, carry, theta * h, context)
-            return s_of(c) - tgt
-
-        # Illinois regula falsi on θ ∈ (0, 1): f(0) and f(1) bracket the root
+        # Illinois regula falsi on θ ∈ (0, 1) (f(0) and f(1) bracket the root), then the
+        # two substeps θh and (1 − θ)h, all in one loop: the integrator's step is traced
+        # and compiled once here instead of twice
         fa, fb = s0[first] - tgt, s1[first] - tgt
+        n_iter = options.crossing_iterations
 
-        def body(_, st):
-            a, b, fa, fb, side = st
-            theta = jnp.clip((a * fb - b * fa) / jnp.where(fb != fa, fb - fa, 1.0), 1e-6, 1 - 1e-6)
-            ft = f(theta)
+        def body(k, st):
+            a, b, fa, fb, side, theta, mid, out, iters, conv = st
+            bracketing = k < n_iter
+            theta_rf = jnp.clip((a * fb - b * fa) / jnp.where(fb != fa, fb - fa, 1.0), 1e-6, 1 - 1e-6)
+            # after the bracketing iterations: the best end of the bracket
+            theta_best = jnp.clip(jnp.where(jnp.abs(fa) < jnp.abs(fb), a, b), 1e-6, 1.0 - 1e-6)
+            theta = jnp.where(bracketing, theta_rf, jnp.where(k == n_iter, theta_best, theta))
+            second = k > n_iter
+            start = jax.tree.map(lambda m, c: jnp.where(second, m, c), mid, carry)
+            c, info = integrator.step(system, start, jnp.where(second, 1.0 - theta, theta) * h, context)
+            ft = s_of(c) - tgt
             same_b = jnp.sign(ft) == jnp.sign(fb)
             a2, fa2 = jnp.where(same_b, a, theta), jnp.where(same_b, fa, ft)
             b2, fb2 = jnp.where(same_b, theta, b), jnp.where(same_b, ft, fb)
             fa2 = jnp.where(same_b & (side == 1), 0.5 * fa2, fa2)
             fb2 = jnp.where(~same_b & (side == -1), 0.5 * fb2, fb2)
-            return a2, b2, fa2, fb2, jnp.where(same_b, 1, -1)
+            keep = lambda new, old: jnp.where(bracketing, new, old)  # noqa: E731
+            sub = ~bracketing
+            return (keep(a2, a), keep(b2, b), keep(fa2, fa), keep(fb2, fb),
+                    keep(jnp.where(same_b, 1, -1), side), theta,
+                    jax.tree.map(lambda x, m: jnp.where(k == n_iter, x, m), c, mid),
+                    jax.tree.map(lambda x, o: jnp.where(second, x, o), c, out),
+                    iters + jnp.where(sub, info.iterations, 0).astype(jnp.int32),
+                    conv & (~sub | info.converged))
 
-        a, b, fa_, fb_, _ = jax.lax.fori_loop(
-            0, options.crossing_iterations, body,
-            (jnp.array(0.0), jnp.array(1.0), fa, fb, jnp.array(0)))
-        theta = jnp.where(jnp.abs(fa_) < jnp.abs(fb_), a, b)
-        theta = jnp.clip(theta, 1e-6, 1.0 - 1e-6)
-
-        def sub(c, dt):
-            c2, info = integrator.step(system, c, dt, context)
-            return c2, info
-
-        cs, infos = jax.lax.scan(sub, carry, jnp.stack([theta * h, (1.0 - theta) * h]))
-        return cs, infos.iterations.sum().astype(jnp.int32), infos.converged.all()
+        init = (jnp.array(0.0), jnp.array(1.0), fa, fb, jnp.array(0), jnp.array(0.5), carry, carry,
+                jnp.zeros((), jnp.int32), jnp.array(True))
+        st = jax.lax.fori_loop(0, n_iter + 2, body, init)
+        return st[7], st[8], st[9]
 
     del jsel
     out, iters, conv = run_if(jnp.any(crossed), lambda _: branch(),
