@@ -299,6 +299,7 @@ def _run_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, op
     """Compile and run the chunked fixed-step loop; ``batch`` members share one vmapped
     program. Returns (segments, final loop, compile time, wall time, chunks run)."""
     init_fn, chunk_fn = (_init_single, _chunk_single) if batch is None else (_init_batch, _chunk_batch)
+    solver = solver.forward_only()  # the chunked loop is never differentiated
     t_end = t0 + n_int * sub * h
     h = jnp.asarray(h)  # traced: runs with other steps reuse the compiled program
     init_c, c1 = compiled(init_fn, system, state, solver)

@@ -54,6 +54,12 @@ class AbstractIntegrator(eqx.Module):
         """Quantities computed once per run (e.g. mass factors), passed to every step."""
         return None
 
+    def forward_only(self) -> "AbstractIntegrator":
+        """The same method for runs that are never differentiated (chunked
+        :func:`~ancf_jax.simulation.simulate`): an integrator may leave out what only
+        derivatives need, which shortens tracing and compilation. Same results."""
+        return self
+
     def init(self, system, state, context) -> Carry:
         """The initial :class:`Carry` of a run from ``state`` (consistent accelerations
         and multipliers)."""

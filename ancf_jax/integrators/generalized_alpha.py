@@ -43,6 +43,8 @@ solved with the same factors and a few steps of iterative refinement.
 
 from __future__ import annotations
 
+import dataclasses
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -98,6 +100,11 @@ class GeneralizedAlpha(AbstractIntegrator):
 
     def prepare(self, system):
         return dae.mass_chain_factor(system)
+
+    def forward_only(self) -> "GeneralizedAlpha":
+        # lax.custom_root traces the tangent solve (a second factorization) and the
+        # residual once more even when nothing is differentiated: ~1 s of tracing
+        return dataclasses.replace(self, implicit_diff=False) if self.implicit_diff else self
 
     def init(self, system, state, context) -> Carry:
         t = jnp.asarray(state.t, float)
