@@ -100,11 +100,13 @@ def s0_variants(n, seed=1):
     return np.random.default_rng(seed).uniform(0.4, 1.2, max(n, POOL))[:n]
 
 
-def s0_batch(plan, exudyn) -> dict:
+def s0_batch(plan, exudyn, dense=False) -> dict:
     """M2 variants of s₀: one vmapped ancf_jax program per size against Exudyn serially
     (each variant's static equilibrium is solved, or read from the cache, untimed)."""
     from ancf_jax.simulation import simulate_batch
     opts = C.ancf_settings("M2")
+    if dense:
+        opts = {**opts, "dense": True}
     built = [C.m2(plan["n"], s0=float(s)) for s in s0_variants(max(plan["sizes"]))]
     rows = []
     for n in plan["sizes"]:

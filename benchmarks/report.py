@@ -25,6 +25,7 @@ TARGETS = (
     ("m1_single", "M1 (6 el.) single run at equal accuracy, ancf_jax / Exudyn run time", 0.5),
     ("m2_single", "M2 (24 el.) single run at equal accuracy, ancf_jax / Exudyn run time", 0.5),
     ("batch_256", "batch of 256 M1 variants: ancf_jax cost per simulation / one Exudyn run", 0.05),
+    ("batch_256_gpu", "the same on the lent GPU (batch_gpu.json) / one Exudyn run on the CPU machine", 0.05),
     ("gradient", "value + gradient w.r.t. (α, β) / one forward run", 3.0),
     ("compile_m1", "compile time of M1 [s]", 5.0),
     ("compile_m2", "compile time of the three-mesh M2 batch [s]", 20.0),
@@ -32,9 +33,13 @@ TARGETS = (
 )
 
 
+#: written on a GPU machine by ``python -m benchmarks.batch_gpu`` (not by benchmarks.run)
+EXTRA = ("batch_gpu", "batch_gpu_dense")
+
+
 def load(results: Path) -> dict:
     out = {}
-    for name in SECTIONS:
+    for name in SECTIONS + EXTRA:
         p = results / f"{name}.json"
         if p.exists():
             out[name] = json.loads(p.read_text())
@@ -107,6 +112,7 @@ def targets(data: dict) -> list:
         else:
             detail = _missing(b) or "no batch rows"
     rows.append(("batch_256", value, detail))
+    rows.append(("batch_256_gpu", *_gpu_batch_target(data)))
     g = data.get("gradient", {})
     rows.append(("gradient", g.get("ratio_value_and_grad_to_forward"),
                  (f"forward {f(g.get('median_forward_s'))} s, value+grad {f(g.get('median_value_and_grad_s'))} s"
@@ -139,6 +145,53 @@ def targets(data: dict) -> list:
         met = None if value is None else value <= limit
         out.append((key, desc, limit, value, met, detail))
     return out
+
+
+def _gpu_batch_target(data):
+    """(ratio, detail) of the GPU batch of 256 against one Exudyn run of batch.json; the
+    ratio only where both spans are equal (no extrapolation across spans)."""
+    b = data.get("batch", {})
+    found = []  # (per simulation at 256, data) of each GPU run (block-tridiagonal, dense)
+    for name in EXTRA:
+        rows_g = {r["size"]: r for r in data.get(name, {}).get("rows", [])}
+        if 256 in rows_g:
+            found.append((rows_g[256]["ancf_jax"]["per_simulation_s"], data[name]))
+    if not found:
+        return None, "no GPU batch of 256 (python -m benchmarks.batch_gpu on a GPU machine)"
+    per, g = min(found, key=lambda x: x[0])
+    solver = "dense LU" if g["settings"]["ancf_jax"]["options"].get("dense") else "block-tridiagonal"
+    detail = f"{g.get('device', 'GPU')}, {solver}: {ms(per)} per simulation (0–{g['t_end']:g} s)"
+    ex = b.get("exudyn_serial")
+    if not ex:
+        return None, detail + "; no Exudyn run in batch.json"
+    if abs(b["t_end"] - g["t_end"]) > 1e-12:
+        return None, detail + f"; batch.json's Exudyn run spans 0–{b['t_end']:g} s: not compared"
+    return per / ex["median_run_s"], detail + f" vs {ms(ex['median_run_s'])} per Exudyn run (CPU machine)"
+
+
+def sec_batch_gpu(d, batch):
+    """Table of the GPU batch rows (benchmarks/batch_gpu.py)."""
+    solver = "dense LU" if d["settings"]["ancf_jax"]["options"].get("dense") else "block-tridiagonal solver"
+    out = [f"## Batch throughput on a GPU ({d.get('device', '?')}, {solver})\n\n"
+           f"{d['model']}, {d['parameters']}, 0–{d['t_end']:g} s, one vmapped program per size "
+           f"(h = {d['settings']['ancf_jax']['dt']:g} s, options {d['settings']['ancf_jax']['options']}, "
+           f"{d['settings']['ancf_jax']['source']}); jax {d['stamp'].get('jax')} on the {d['stamp'].get('jax_backend')} "
+           f"backend, {d['stamp'].get('date')}. Command: `{d['command']}` on the lent GPU machine.\n\n"]
+    ex = (batch or {}).get("exudyn_serial")
+    same = ex is not None and abs(batch["t_end"] - d["t_end"]) < 1e-12
+    rows = []
+    for r in d["rows"]:
+        a = r["ancf_jax"]
+        rows.append([r["size"], f(a["compile_s"]), f(a["median_batch_run_s"]), ms(a["per_simulation_s"]),
+                     f"{a['ok']}/{r['size']}", f(a["per_simulation_s"] / ex["median_run_s"]) if same else "–"])
+    out.append(table(["variants", "compile [s]", "batch run [s]", "per simulation", "ok",
+                      "per sim. / one Exudyn run (CPU machine)"], rows))
+    if not same:
+        out.append("\nNo Exudyn run over the same span in batch.json: the ratio column is left empty "
+                   "(run `python -m benchmarks.run --only batch` in the same mode).\n")
+    if d.get("s0"):
+        out.append(_s0_batch(d["s0"]))
+    return "".join(out)
 
 
 def _target_table(data):
@@ -448,6 +501,8 @@ def render(results: Path | None = None, out: Path | None = None) -> Path:
     for name in SECTIONS:
         if name in data:
             parts.append(renderers[name](data[name]) + "\n")
+        if name == "batch":
+            parts += [sec_batch_gpu(data[g], data.get("batch")) + "\n" for g in EXTRA if g in data]
     out.write_text("".join(parts))
     return out
 

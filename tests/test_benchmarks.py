@@ -121,3 +121,39 @@ def test_scaling_section_tiny_without_exudyn(tmp_path, monkeypatch):
     assert "not installed" in data["exudyn_missing"] or "disabled" in data["exudyn_missing"]
     md = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
     assert "Per-step cost" in md
+
+
+def test_report_gpu_batch_rows_and_target(tmp_path):
+    """batch_gpu*.json (written on a GPU machine) add their tables after the CPU batch;
+    the GPU target row takes the faster solver's batch of 256 and compares it with one
+    Exudyn run only when batch.json covers the same span."""
+    synthetic(tmp_path)
+
+    def gpu(name, dense, per_256):
+        rows = [dict(size=n, ancf_jax=dict(compile_s=10.0, median_batch_run_s=per * n, per_simulation_s=per,
+                                           ok=n, batch_run_s=[per * n]))
+                for n, per in ((64, 0.1), (256, per_256))]
+        (tmp_path / f"{name}.json").write_text(json.dumps(dict(
+            stamp={**STAMP, "jax_backend": "gpu"}, section="batch_gpu", quick=False, exudyn=False,
+            backend="gpu", device="Test GPU", t_end=2.0, model="M1", parameters="alpha, E",
+            settings=dict(ancf_jax=dict(dt=5e-3, options=dict(dense=True) if dense else {}, source="default")),
+            rows=rows, command=f"cmd {name}")))
+
+    gpu("batch_gpu", False, 0.03)
+    gpu("batch_gpu_dense", True, 0.012)
+    batch = json.loads((tmp_path / "batch.json").read_text())
+    batch["exudyn_serial"] = dict(measured=8, median_run_s=0.3, median_run_plus_build_s=0.31, ok=8,
+                                  final_tip_y_max_difference_to_ancf_m=1e-6)
+    batch["exudyn_pool"] = dict(workers=2, startup_s=1.0, start_method="spawn")
+    (tmp_path / "batch.json").write_text(json.dumps(batch))
+    text = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
+    assert "Batch throughput on a GPU (Test GPU, block-tridiagonal solver)" in text
+    assert "Batch throughput on a GPU (Test GPU, dense LU)" in text
+    line = next(ln for ln in text.splitlines() if ln.startswith("| the same on the lent GPU"))
+    assert "| 0.04 | met |" in line and "dense LU: 12 ms per simulation" in line  # 0.012 / 0.3
+    # a different span in batch.json: no ratio
+    batch["t_end"] = 0.5
+    (tmp_path / "batch.json").write_text(json.dumps(batch))
+    text = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
+    line = next(ln for ln in text.splitlines() if ln.startswith("| the same on the lent GPU"))
+    assert "not measured" in line and "spans 0–0.5 s: not compared" in line
