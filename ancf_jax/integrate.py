@@ -97,6 +97,10 @@ def sliding_beams(system: System) -> dict[int, int]:
     return out
 
 
+#: step of a frozen batch member, relative to h (see integrate_fixed)
+FROZEN_STEP = 1e-6
+
+
 def step_status(system: System, old: Carry, new: Carry, converged, options: RunOptions):
     """Failure code of a step (OK if none)."""
     finite = (jnp.all(jnp.isfinite(new.q)) & jnp.all(jnp.isfinite(new.v))
@@ -238,13 +242,21 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
 
     def one_step(c, _):
         loop, iters, maxit, ncross = c
+        active = (loop.status == OK) & (loop.carry.t < t_stop - 0.5 * h)
+        # Under vmap lax.cond becomes a select: a member that has failed or finished
+        # still computes a step, whose result is discarded. It takes a negligible step
+        # (h · FROZEN_STEP from its last good state, where Newton converges at once), so
+        # it does not keep the batch's Newton and retry loops running (a failed member
+        # repeating its failing step made every later step run the full retry ladder).
+        # Unbatched, advance only runs for an active state, so hs = h.
+        hs = jnp.where(active, h, FROZEN_STEP * h)
 
         def advance():
             if options.max_halvings:
-                new, info = _step_with_retries(system, integrator, loop.carry, h, context, options)
+                new, info = _step_with_retries(system, integrator, loop.carry, hs, context, options)
             else:
-                new, info = integrator.step(system, loop.carry, h, context)
-            new2, extra, crossed = _crossing(system, integrator, loop.carry, new, h, context, options)
+                new, info = integrator.step(system, loop.carry, hs, context)
+            new2, extra, crossed = _crossing(system, integrator, loop.carry, new, hs, context, options)
             it = info.iterations
             conv = info.converged
             if extra is not None:
@@ -259,7 +271,6 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
         def frozen():
             return loop, iters, maxit, ncross
 
-        active = (loop.status == OK) & (loop.carry.t < t_stop - 0.5 * h)
         return jax.lax.cond(active, advance, frozen), None
 
     def interval(loop, _):
