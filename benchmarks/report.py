@@ -83,7 +83,7 @@ def targets(data: dict) -> list:
         if r is not None:
             value = r.get("ratio_run")
             if value is None:
-                detail = (r.get("exudyn", {}).get("missing") or "no settings within tolerance for one code")
+                detail = r.get("exudyn", {}).get("missing") or _none_within(r)
             else:
                 a, e = r["ancf_jax"], r["exudyn"]
                 ac, ec = a["chosen"], e["chosen"]
@@ -166,7 +166,17 @@ def _gpu_batch_target(data):
         return None, detail + "; no Exudyn run in batch.json"
     if abs(b["t_end"] - g["t_end"]) > 1e-12:
         return None, detail + f"; batch.json's Exudyn run spans 0–{b['t_end']:g} s: not compared"
+    if not _same_settings(g, b):
+        return None, detail + "; run at other ancf_jax settings than batch.json's (not equal accuracy): not compared"
     return per / ex["median_run_s"], detail + f" vs {ms(ex['median_run_s'])} per Exudyn run (CPU machine)"
+
+
+def _same_settings(gpu, batch) -> bool:
+    """The GPU rows ran ancf_jax at the CPU batch's step and options (dense aside), so
+    both meet the same accuracy."""
+    a, c = gpu["settings"]["ancf_jax"], batch.get("settings", {}).get("ancf_jax", {})
+    strip = lambda o: {k: v for k, v in (o or {}).items() if k != "dense"}  # noqa: E731
+    return c.get("dt") is not None and abs(a["dt"] - c["dt"]) < 1e-15 and strip(a["options"]) == strip(c["options"])
 
 
 def sec_batch_gpu(d, batch):
@@ -178,7 +188,7 @@ def sec_batch_gpu(d, batch):
            f"{d['settings']['ancf_jax']['source']}); jax {d['stamp'].get('jax')} on the {d['stamp'].get('jax_backend')} "
            f"backend, {d['stamp'].get('date')}. Command: `{d['command']}` on the lent GPU machine.\n\n"]
     ex = (batch or {}).get("exudyn_serial")
-    same = ex is not None and abs(batch["t_end"] - d["t_end"]) < 1e-12
+    same = ex is not None and abs(batch["t_end"] - d["t_end"]) < 1e-12 and _same_settings(d, batch)
     rows = []
     for r in d["rows"]:
         a = r["ancf_jax"]
@@ -187,11 +197,24 @@ def sec_batch_gpu(d, batch):
     out.append(table(["variants", "compile [s]", "batch run [s]", "per simulation", "ok",
                       "per sim. / one Exudyn run (CPU machine)"], rows))
     if not same:
-        out.append("\nNo Exudyn run over the same span in batch.json: the ratio column is left empty "
-                   "(run `python -m benchmarks.run --only batch` in the same mode).\n")
+        out.append("\nNo Exudyn run over the same span and at the same ancf_jax settings in batch.json: "
+                   "the ratio column is left empty (run `python -m benchmarks.run --only batch` in the "
+                   "same mode as single_run.json).\n")
     if d.get("s0"):
         out.append(_s0_batch(d["s0"]))
     return "".join(out)
+
+
+def _none_within(r) -> str:
+    """Which code found no settings within the tolerance, and its smallest error."""
+    out = []
+    for code in ("ancf_jax", "exudyn"):
+        c = r.get(code, {})
+        if not c.get("chosen"):
+            errs = [t["error"] for t in c.get("tried", []) if t.get("status") == "ok" and math.isfinite(t["error"])]
+            best = f"smallest error {f(min(errs))} m" if errs else "no completed run"
+            out.append(f"{code}: no settings within {f(r.get('tolerance'))} m ({best})")
+    return "; ".join(out) or "no settings within tolerance"
 
 
 def _target_table(data):

@@ -136,7 +136,7 @@ def test_report_gpu_batch_rows_and_target(tmp_path):
         (tmp_path / f"{name}.json").write_text(json.dumps(dict(
             stamp={**STAMP, "jax_backend": "gpu"}, section="batch_gpu", quick=False, exudyn=False,
             backend="gpu", device="Test GPU", t_end=2.0, model="M1", parameters="alpha, E",
-            settings=dict(ancf_jax=dict(dt=5e-3, options=dict(dense=True) if dense else {}, source="default")),
+            settings=dict(ancf_jax=dict(dt=1e-3, options=dict(dense=True) if dense else {}, source="default")),
             rows=rows, command=f"cmd {name}")))
 
     gpu("batch_gpu", False, 0.03)
@@ -157,3 +157,9 @@ def test_report_gpu_batch_rows_and_target(tmp_path):
     text = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
     line = next(ln for ln in text.splitlines() if ln.startswith("| the same on the lent GPU"))
     assert "not measured" in line and "spans 0–0.5 s: not compared" in line
+    # another step than the CPU batch: not equal accuracy, no ratio
+    batch["t_end"], batch["settings"]["ancf_jax"]["dt"] = 2.0, 1.25e-3
+    (tmp_path / "batch.json").write_text(json.dumps(batch))
+    text = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
+    line = next(ln for ln in text.splitlines() if ln.startswith("| the same on the lent GPU"))
+    assert "not measured" in line and "other ancf_jax settings" in line
