@@ -136,38 +136,42 @@ def s0_batch(plan, exudyn, dense=False) -> dict:
                 t_end=plan["t_end"], dt=plan["dt"], solver_options=opts, rows=rows)
 
 
+def m1_batch_row(system, state, n, plan, dt, options, label="batch"):
+    """One ancf_jax batch row: the first n variants in one vmapped program (compiled
+    once, then ``plan["reps"]`` timed runs). Returns (row, final tip Y of every member)."""
+    from ancf_jax.simulation import simulate_batch
+    systems = [with_parameters(system, al, e) for al, e in variants(n)]
+    # outputs on the 10 ms grid and ONE chunk for the whole run: under vmap the frozen
+    # steps past t_end in a last, partly used 500-step chunk are not skipped (cond
+    # becomes select) and would cost as much as real ones
+    kw = dict(t_end=plan["t_end"], dt=dt, output_dt=C.GRID, solver_options=options,
+              on_failure="return", progress=False, chunks=1)
+    res = simulate_batch(systems, [state] * n, **kw)  # compiles
+    compile_s = res[0].compile_time_s
+    walls = []
+    for _ in range(plan["reps"]):
+        res = simulate_batch(systems, [state] * n, **kw)
+        walls.append(res[0].info["batch_wall_time_s"])
+    ok = sum(r.status == "ok" for r in res)
+    final = [float(C.ancf_output("M1", r)[-1]) for r in res]
+    row = dict(size=n, ancf_jax=dict(compile_s=compile_s, batch_run_s=walls, median_batch_run_s=C.median(walls),
+                                     per_simulation_s=C.median(walls) / n, ok=ok))
+    print(f"{label} {n}: ancf_jax {C.median(walls):.2f} s ({C.median(walls) / n * 1e3:.2f} ms/sim, "
+          f"compile {compile_s:.1f} s, {ok}/{n} ok)", flush=True)
+    return row, final
+
+
 def main(argv=None, *, quick=None, exudyn=None):
     quick, exudyn = C.section_options(__doc__, argv, quick, exudyn)
     plan = QUICK if quick else FULL
     settings = chosen_settings(quick)
-    from ancf_jax.simulation import simulate_batch
     system, state = C.m1(6)
     a = settings["ancf_jax"]
     rows = []
     final_ancf = {}
+    options = {k: v for k, v in a["options"].items() if k != "dense"}
     for n in plan["sizes"]:
-        par = variants(n)
-        systems = [with_parameters(system, al, e) for al, e in par]
-        states = [state] * n
-        # outputs on the 10 ms grid and ONE chunk for the whole run: under vmap the
-        # frozen steps past t_end in a last, partly used 500-step chunk are not skipped
-        # (cond becomes select) and would cost as much as real ones
-        options = {k: v for k, v in a["options"].items() if k != "dense"}
-        kw = dict(t_end=plan["t_end"], dt=a["dt"], output_dt=C.GRID, solver_options=options,
-                  on_failure="return", progress=False, chunks=1)
-        res = simulate_batch(systems, states, **kw)  # compiles
-        compile_s = res[0].compile_time_s
-        walls = []
-        for _ in range(plan["reps"]):
-            res = simulate_batch(systems, states, **kw)
-            walls.append(res[0].info["batch_wall_time_s"])
-        ok = sum(r.status == "ok" for r in res)
-        final_ancf[n] = [float(C.ancf_output("M1", r)[-1]) for r in res]
-        row = dict(size=n, ancf_jax=dict(compile_s=compile_s, batch_run_s=walls,
-                                         median_batch_run_s=C.median(walls),
-                                         per_simulation_s=C.median(walls) / n, ok=ok))
-        print(f"batch {n}: ancf_jax {C.median(walls):.2f} s ({C.median(walls) / n * 1e3:.1f} ms/sim, "
-              f"compile {compile_s:.1f} s, {ok}/{n} ok)", flush=True)
+        row, final_ancf[n] = m1_batch_row(system, state, n, plan, a["dt"], options)
         rows.append(row)
     out = dict(section="batch", quick=quick, exudyn=exudyn, t_end=plan["t_end"], model="M1, 6 elements",
                parameters="alpha ~ U(0.01, 0.05) 1/s, E ~ U(180, 220) GPa, seed 0",

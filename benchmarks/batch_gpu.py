@@ -24,7 +24,7 @@ import json
 import numpy as np
 
 from . import cases as C
-from .batch import FULL, QUICK, s0_batch, variants, with_parameters
+from .batch import FULL, QUICK, m1_batch_row, s0_batch
 from .common import RESULTS, write
 
 
@@ -32,11 +32,12 @@ def settings() -> dict:
     """ancf_jax's M1 equal-accuracy settings from single_run.json (either mode)."""
     path = RESULTS / "single_run.json"
     if path.exists():
-        for row in json.loads(path.read_text()).get("rows", []):
+        data = json.loads(path.read_text())
+        for row in data.get("rows", []):
             c = row.get("ancf_jax", {}).get("chosen") if row["model"] == "M1" else None
             if c:
-                return dict(dt=c["dt"], options=c["options"], source="single_run.json"
-                            + (" (quick)" if json.loads(path.read_text()).get("quick") else ""))
+                return dict(dt=c["dt"], options=c["options"],
+                            source="single_run.json" + (" (quick)" if data.get("quick") else ""))
     return dict(dt=1e-3, options={}, source="default")
 
 
@@ -49,8 +50,6 @@ def main(argv=None) -> str:
     ap.add_argument("--dense", action="store_true", help="dense LU (batched) instead of the block-tridiagonal solver")
     args = ap.parse_args(argv)
     import jax
-
-    from ancf_jax.simulation import simulate_batch
     plan = dict(QUICK if args.quick else FULL)
     if args.sizes:
         plan["sizes"] = tuple(int(s) for s in args.sizes.split(","))
@@ -70,23 +69,9 @@ def main(argv=None) -> str:
                command="python -m benchmarks.batch_gpu" + (" --quick" if args.quick else "")
                + (" --dense" if args.dense else ""))
     for n in plan["sizes"]:
-        systems = [with_parameters(system, al, e) for al, e in variants(n)]
-        kw = dict(t_end=plan["t_end"], dt=a["dt"], output_dt=C.GRID, solver_options=options,
-                  on_failure="return", progress=False, chunks=1)
-        res = simulate_batch(systems, [state] * n, **kw)  # compiles
-        compile_s = res[0].compile_time_s
-        walls = []
-        for _ in range(plan["reps"]):
-            res = simulate_batch(systems, [state] * n, **kw)
-            walls.append(res[0].info["batch_wall_time_s"])
-        ok = sum(r.status == "ok" for r in res)
-        final = [float(C.ancf_output("M1", r)[-1]) for r in res]
-        out["rows"].append(dict(size=n, ancf_jax=dict(compile_s=compile_s, batch_run_s=walls,
-                                                     median_batch_run_s=C.median(walls),
-                                                     per_simulation_s=C.median(walls) / n, ok=ok,
-                                                     final_tip_y_first=final[: min(n, 8)])))
-        print(f"GPU batch {n}: {C.median(walls):.2f} s ({C.median(walls) / n * 1e3:.2f} ms/sim, "
-              f"compile {compile_s:.1f} s, {ok}/{n} ok)", flush=True)
+        row, final = m1_batch_row(system, state, n, plan, a["dt"], options, label="GPU batch")
+        row["ancf_jax"]["final_tip_y_first"] = final[: min(n, 8)]
+        out["rows"].append(row)
         path = write(name, out)
     if not args.no_s0:
         out["s0"] = s0_batch(plan["s0"], exudyn=False, dense=args.dense)
