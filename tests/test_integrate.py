@@ -98,3 +98,56 @@ def test_failed_newton_step_is_completed_in_substeps():
     assert np.max(np.abs(tip(retried) - tip(fine))) < 1e-4
     # the failed steps cost more iterations than any plain step (two substeps, retry)
     assert np.max(retried.iterations) > 6
+
+
+_STEP_LOG = []
+
+
+def _log_step(alpha, h, iterations):
+    _STEP_LOG.append(np.column_stack([np.ravel(alpha), np.ravel(h), np.ravel(iterations)]))
+
+
+def test_failed_batch_member_takes_negligible_steps():
+    """Under vmap ``lax.cond`` is a select: a member that has failed still computes a
+    step (discarded). It must take a negligible step from its last good state (Newton
+    converges at once) instead of repeating its failing one, whose Newton loop would
+    hold every other member of the batch. Two M1 variants, generalized-α with 6
+    Newton iterations at h = 4 ms and no retries: the paper's α = 0.02 1/s fails at
+    t = 16 ms (see the test above), the other member (measured) runs on. Every step
+    the integrator computes is logged with its size and Newton iterations."""
+    import equinox as eqx
+
+    from ancf_jax.integrate import FROZEN_STEP
+    from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
+    from ancf_jax.models.m1 import m1_model
+    from ancf_jax.simulation import simulate_batch
+
+    class LoggedSteps(GeneralizedAlpha):
+        def step(self, system, carry, h, context):
+            new, info = super().step(system, carry, h, context)
+            jax.debug.callback(_log_step, system.beams[0].alpha, h, info.iterations)
+            return new, info
+
+    system, state = m1_model(6).build()
+    # the survivor: another α (to tell the members apart in the log) and a tenth of
+    # gravity, so its steps converge within 6 iterations (measured)
+    failing, running = 0.02, 0.03
+    systems = [eqx.tree_at(lambda s: (s.beams[0].alpha, s.gravity), system,
+                           (jax.numpy.asarray(a), g * system.gravity))
+               for a, g in ((failing, 1.0), (running, 0.1))]
+    h, t_end = 4e-3, 0.06
+    _STEP_LOG.clear()
+    res = simulate_batch(systems, [state] * 2, t_end=t_end, dt=h, output_dt=h, max_halvings=0,
+                         solver=LoggedSteps(max_iterations=6), on_failure="return", progress=False,
+                         chunks=1)
+    assert res[0].status == "newton" and res[1].status == "ok"
+    n_ok = int(round(res[0].failure_time / h)) - 1  # steps completed before the failing one
+    log = np.concatenate(_STEP_LOG)
+    mine = log[np.isclose(log[:, 0], failing)]
+    assert len(mine) == round(t_end / h)  # the batch computed a step for it every time
+    full, after = mine[: n_ok + 1], mine[n_ok + 1:]
+    np.testing.assert_allclose(full[:, 1], h)
+    assert full[-1, 2] == 6  # the failing step ran out of iterations
+    assert len(after) > 0
+    np.testing.assert_allclose(after[:, 1], FROZEN_STEP * h)
+    assert np.all(after[:, 2] <= 2)  # negligible steps: Newton converges at once
