@@ -28,7 +28,8 @@
 #     ancf-jax synth m1 --alpha 0.02 --beta 0 --noise 1e-3 --rate 1000 --seed 1 --out data.csv
 #     ancf-jax fit m1 --data data.csv --params alpha,beta --out results/m1-fit
 #
-# `ANCF_JAX_QUICK=1` shortens the span and coarsens the mesh.
+# `ANCF_JAX_QUICK=1` shortens the span and coarsens the mesh (to the problem of
+# `tests/test_identification.py`, whose compiled programs it then shares).
 
 # %%
 import os
@@ -45,7 +46,7 @@ warnings.filterwarnings("ignore", message="IProgress not found")  # tqdm without
 
 QUICK = os.environ.get("ANCF_JAX_QUICK", "0") == "1"
 ELEMENTS = 3 if QUICK else 6
-T_END = 0.5 if QUICK else 2.0       # [s]
+T_END = 1.0 if QUICK else 2.0       # [s]
 DT = 2e-3                            # [s] solver step (also the output grid)
 RATE = 500.0                         # [Hz] sample rate of the "measurements"
 NOISE = 1e-4 if QUICK else 1e-3      # [m] (the short quick span needs less noise to say much)
@@ -60,8 +61,10 @@ TRUE = {"alpha": 0.02, "beta": 0.0}
 
 # %%
 problem = Problem.from_scenario("m1", ("alpha", "beta"), elements=ELEMENTS, t_end=T_END, dt=DT)
-clean, _ = synthesize(problem, TRUE, noise=0.0, rate=RATE)
-noisy, _ = synthesize(problem, TRUE, noise=NOISE, rate=RATE, seed=1)
+# program="jacobian": simulate with the fit's compiled program (compiled here once,
+# reused by every fit of one member below) instead of compiling a second, value-only one
+clean, _ = synthesize(problem, TRUE, noise=0.0, rate=RATE, program="jacobian")
+noisy, _ = synthesize(problem, TRUE, noise=NOISE, rate=RATE, seed=1, program="jacobian")
 print(f"{len(clean.t)} samples in [{clean.t[0]:g}, {clean.t[-1]:g}] s")
 
 fig, ax = plt.subplots(figsize=(7, 3))
@@ -88,8 +91,8 @@ assert all(abs(r.value("alpha") / 0.02 - 1) < 1e-4 for r in runs)
 # %% [markdown]
 # ## 3. Noisy data: estimates with standard errors, and whether β is determined
 #
-# (1 mm of noise on the full 2 s span; 0.1 mm in quick mode, whose 0.5 s span alone
-# does not determine α against 1 mm.)
+# (1 mm of noise on the full 2 s span; 0.1 mm in quick mode, whose 1 s span alone
+# determines α only marginally against 1 mm.)
 #
 # With both α and β free, the report gives Gauss–Newton standard errors and the
 # correlation at the optimum. A parameter the data cannot determine (here β: the tip
