@@ -26,7 +26,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .linalg import BlockTridiagonal, SaddleFactor, SaddleMatrix, factor_chain, factor_saddle, solve_saddle
+from .linalg import (BlockTridiagonal, SaddleFactor, SaddleMatrix, factor_chain, factor_saddle, solve_saddle,
+                     solve_symmetric_implicit)
 from .system import System
 
 
@@ -76,11 +77,15 @@ def mass_chain_factor(system: System):
     return factor_chain(system.beam_mass()) if system.chain_size else None
 
 
+def mass_saddle_matrix(system: System, jac) -> SaddleMatrix:
+    """[[M, Φ_qᵀ], [Φ_q, 0]] at the current Φ_q (symmetric), in bordered form."""
+    return saddle_matrix(system, system.beam_mass() if system.chain_size else None,
+                         jnp.diag(system.border_mass_diagonal()), jac)
+
+
 def mass_saddle_factor(system: System, jac, chain_factor=None, *, dense=False) -> SaddleFactor:
     """Factors of [[M, Φ_qᵀ], [Φ_q, 0]] at the current Φ_q."""
-    a = saddle_matrix(system, system.beam_mass() if system.chain_size else None,
-                      jnp.diag(system.border_mass_diagonal()), jac)
-    return factor_saddle(a, dense=dense, chain_factor=chain_factor)
+    return factor_saddle(mass_saddle_matrix(system, jac), dense=dense, chain_factor=chain_factor)
 
 
 def powers(system: System, q, v, t, lam):
@@ -120,13 +125,18 @@ def accelerations(system: System, q, v, t, *, baumgarte: float = 0.0, chain_fact
 
 
 def project_velocity(system: System, q, v, t, factor: SaddleFactor, jac=None):
-    """Project v onto Φ_q v + Φ_t = 0 in the metric of ``factor``'s upper block
-    (minimum-norm correction; the mass metric for the mass saddle factor)."""
+    """Project v onto Φ_q v + Φ_t = 0 in the mass metric (minimum-norm correction).
+
+    ``factor``: :func:`mass_saddle_factor` at ``jac`` (= Φ_q(q, t)). The solve is
+    differentiated implicitly (:func:`~ancf_jax.linalg.solve_symmetric_implicit`):
+    gradients and tangents through a step reuse these factors instead of
+    differentiating the factorization."""
     if not system.n_constraints:
         return v
     jac = system.constraint_jacobian(q, t) if jac is None else jac
     viol = jac @ v + system.constraint_time_derivative(q, t)
-    x = solve_saddle(factor, to_solver_order(system, jnp.zeros_like(v), -viol))
+    x = solve_symmetric_implicit(mass_saddle_matrix(system, jac), factor,
+                                 to_solver_order(system, jnp.zeros_like(v), -viol))
     dv, _ = from_solver_order(system, x)
     return v + dv
 

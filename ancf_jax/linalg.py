@@ -205,6 +205,14 @@ class SaddleMatrix(eqx.Module):
     def chain_size(self) -> int:
         return 0 if self.chain is None else self.chain.size
 
+    def matvec(self, x):
+        """A x for x of size n_c + n_b (chain entries first), shape (n,)."""
+        if self.chain is None:
+            return self.e @ x
+        n_c = self.chain.size
+        xc, xb = x[:n_c], x[n_c:]
+        return jnp.concatenate([self.chain.matvec(xc) + self.b @ xb, self.c @ xc + self.e @ xb])
+
     def to_dense(self):
         """The dense saddle-point matrix (for tests and small systems)."""
         if self.chain is None:
@@ -243,6 +251,18 @@ def factor_saddle(a: SaddleMatrix, *, dense: bool = False,
     x = solve_chain(cf, a.b)
     s = a.e - a.c @ x
     return SaddleFactor(cf, x, a.c, lu_factor(s), dense=False, n_chain=n_c)
+
+
+def solve_symmetric_implicit(a: SaddleMatrix, f: SaddleFactor, r):
+    """x = A⁻¹ r for a symmetric A with its factors f, differentiated implicitly.
+
+    ``jax.lax.custom_linear_solve``: the derivative of x is dx = A⁻¹ (dr − dA x),
+    one more solve with the same factors (held constant) and a product with dA from
+    ``a.matvec``, instead of differentiating through the factorization (the reverse
+    pass of an LU factorization costs several times the factorization).
+    """
+    fac = jax.lax.stop_gradient(f)
+    return jax.lax.custom_linear_solve(a.matvec, r, lambda _, rhs: solve_saddle(fac, rhs), symmetric=True)
 
 
 def solve_saddle(f: SaddleFactor, r):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ancf_jax.linalg import (BlockTridiagonal, SaddleMatrix, factor_chain, factor_saddle, lu_factor,
-                             lu_solve, solve_chain, solve_saddle)
+                             lu_solve, solve_chain, solve_saddle, solve_symmetric_implicit)
 
 
 def _chain(rng, n_blocks=5, b=4):
@@ -35,6 +35,46 @@ def test_bordered_saddle_solves_like_dense(rng, dense):
     r = rng.normal(size=t.size + n_b)
     x = solve_saddle(factor_saddle(a, dense=dense), jnp.asarray(r))
     np.testing.assert_allclose(x, np.linalg.solve(np.asarray(a.to_dense()), r), rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("dense", [False, True])
+def test_implicitly_differentiated_solve_has_the_derivatives_of_a_dense_solve(rng, dense):
+    """x(p) = A(p)⁻¹ r(p) for a symmetric bordered A(p) (block-tridiagonal SPD chain,
+    border and constraint rows depending on p): value, JVP and gradient of
+    ``solve_symmetric_implicit`` (factors held constant, derivatives by extra solves)
+    equal those of ``jnp.linalg.solve`` on the dense matrix (differentiated through)."""
+    n_blocks, b, n_b = 4, 4, 3
+    d = rng.normal(size=(n_blocks, b, b))
+    low = jnp.asarray(rng.normal(size=(n_blocks - 1, b, b)))
+    diag = jnp.asarray(d + np.swapaxes(d, 1, 2) + 16.0 * np.eye(b))  # symmetric, dominant
+    n_c = n_blocks * b
+    g0, g1 = rng.normal(size=(n_b, n_c)), rng.normal(size=(n_b, n_c))
+    r0, r1 = rng.normal(size=n_c + n_b), rng.normal(size=n_c + n_b)
+
+    def parts(p):
+        scale = 1.0 + 0.1 * p[0]
+        chain = BlockTridiagonal(scale * diag, scale * low, scale * jnp.swapaxes(low, 1, 2))
+        jac = jnp.asarray(g0) + p[1] * jnp.asarray(g1)
+        return chain, jac, jnp.asarray(r0) + p[0] * p[1] * jnp.asarray(r1)
+
+    def dense_solve(p):
+        chain, jac, r = parts(p)
+        a = jnp.block([[chain.to_dense(), jac.T], [jac, jnp.zeros((n_b, n_b))]])
+        return jnp.linalg.solve(a, r)
+
+    def implicit(p):
+        chain, jac, r = parts(p)
+        a = SaddleMatrix(chain, jac.T, jac, jnp.zeros((n_b, n_b)))
+        return solve_symmetric_implicit(a, factor_saddle(a, dense=dense), r)
+
+    p = jnp.array([0.3, -0.7])
+    np.testing.assert_allclose(implicit(p), dense_solve(p), rtol=1e-10, atol=1e-12)
+    tangent = jnp.array([0.4, 1.1])
+    np.testing.assert_allclose(jax.jvp(implicit, (p,), (tangent,))[1],
+                               jax.jvp(dense_solve, (p,), (tangent,))[1], rtol=1e-9, atol=1e-12)
+    w = jnp.asarray(rng.normal(size=n_c + n_b))
+    np.testing.assert_allclose(jax.grad(lambda q: implicit(q) @ w)(p),
+                               jax.grad(lambda q: dense_solve(q) @ w)(p), rtol=1e-9, atol=1e-12)
 
 
 def test_lu_keeps_the_permutation_and_solves_with_pivoting(rng):
