@@ -9,7 +9,10 @@ through it.
 
 Failures (codes in :mod:`ancf_jax.integrators.base`): a non-finite state (NAN), a
 Newton solve that did not converge (NEWTON), a constraint violation max|Φ| above
-``drift_tolerance`` (DRIFT), a sliding coordinate outside its beam (LEFT_BEAM). After
+``drift_tolerance`` (DRIFT), a sliding coordinate outside its beam (LEFT_BEAM), a
+sliding coordinate that moved more than ``max_sliding_step`` of an element in one step,
+i.e. a spurious Newton solution (SLIDING_JUMP; retried in substeps like a Newton
+failure). After
 the first failure the state is frozen at the last good step and the failure time is
 recorded; :mod:`ancf_jax.simulation` turns that into an error.
 
@@ -30,7 +33,8 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from .integrators.base import DRIFT, LEFT_BEAM, NAN, NEWTON, OK, AbstractIntegrator, Carry, StepInfo, run_if
+from .integrators.base import (DRIFT, LEFT_BEAM, NAN, NEWTON, OK, SLIDING_JUMP, AbstractIntegrator, Carry, StepInfo,
+                               run_if)
 from .joints import SlidingJoint
 from .system import State, System
 
@@ -46,9 +50,13 @@ class RunOptions(eqx.Module):
             it in substeps, halving down to h / 2^max_halvings and growing back after
             successes (0: no retries; a ``while_loop``, so reverse-mode differentiation
             needs 0).
+        max_sliding_step: largest move of a sliding coordinate in one step, as a
+            fraction of the length of the element it starts in; a larger move is taken
+            for a spurious Newton solution (SLIDING_JUMP), retried like a failed step.
     """
 
     drift_tolerance: float = eqx.field(static=True, default=1e-6)
+    max_sliding_step: float = eqx.field(static=True, default=0.5)
     locate_crossings: bool = eqx.field(static=True, default=False)
     crossing_iterations: int = eqx.field(static=True, default=6)
     max_halvings: int = eqx.field(static=True, default=0)
@@ -97,6 +105,26 @@ def sliding_beams(system: System) -> dict[int, int]:
     return out
 
 
+def sliding_jumped(system: System, q_old, q_new, max_step: float):
+    """True if a sliding coordinate moved more than ``max_step`` times the length of
+    the element it started in during one step.
+
+    A step that moves a joint that far is not a usable step (the node-crossing logic
+    assumes at most one crossing per step); in practice it is a spurious Newton
+    solution with the joint elsewhere on the cable (measured: M2, 12 elements of
+    0.335 m, ρ∞ = 0.5, h = 1 ms, trolley at rest at s₀ = 0.493 m: s = 0.710 m after the
+    first step, 0.65 of an element, and the run went on oscillating until the joint
+    left the beam). Such a step counts as failed: redone in substeps like a Newton
+    failure, or reported as SLIDING_JUMP."""
+    out = jnp.array(False)
+    for j, b in sliding_beams(system).items():
+        s0, s1 = system.sliding(q_old, j), system.sliding(q_new, j)
+        mesh = system.beams[b].mesh
+        k, _ = mesh.locate(s0)
+        out = out | (jnp.abs(s1 - s0) > max_step * mesh.element_lengths[k])
+    return out
+
+
 #: step of a frozen batch member, relative to h (see integrate_fixed)
 FROZEN_STEP = 1e-6
 
@@ -107,6 +135,9 @@ def step_status(system: System, old: Carry, new: Carry, converged, options: RunO
               & jnp.all(jnp.isfinite(new.lam)))
     code = jnp.where(finite, OK, NAN)
     code = jnp.where((code == OK) & ~converged, NEWTON, code)
+    if sliding_beams(system):
+        code = jnp.where((code == OK) & sliding_jumped(system, old.q, new.q, options.max_sliding_step),
+                         SLIDING_JUMP, code)
     if system.n_constraints:
         viol = jnp.max(jnp.abs(system.constraint(new.q, new.t)))
         code = jnp.where((code == OK) & ~(viol <= options.drift_tolerance), DRIFT, code)
@@ -213,7 +244,8 @@ def _step_with_retries(system, integrator, carry, h, context, options):
         dt = jnp.minimum(h_try, h - done)
         new, info = integrator.step(system, c, dt, context)
         good = (info.converged & jnp.all(jnp.isfinite(new.q)) & jnp.all(jnp.isfinite(new.v))
-                & jnp.all(jnp.isfinite(new.lam)))
+                & jnp.all(jnp.isfinite(new.lam))
+                & ~sliding_jumped(system, c.q, new.q, options.max_sliding_step))
         first = jax.tree.map(lambda a, b: jnp.where(attempt == 0, a, b), new, first)
         c = jax.tree.map(lambda a, b: jnp.where(good, a, b), new, c)
         done = jnp.where(good, done + dt, done)

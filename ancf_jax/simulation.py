@@ -186,6 +186,9 @@ def _failure_message(status: int, t_fail: float, system: System, options: RunOpt
     elif reason == "constraint_drift":
         why = (f"the constraint violation exceeded drift_tolerance = {options.drift_tolerance:g} "
                "(reduce dt or tighten the solver tolerances)")
+    elif reason == "sliding_jump":
+        why = (f"a sliding joint moved more than {options.max_sliding_step:g} of an element length in one "
+               "step: the Newton iteration found a spurious solution (reduce dt, or raise rho_inf towards 1)")
     elif reason == "left_beam":
         names = _joints_that_left(system, *(last or (None, None, 0.0)), t_fail)
         which = (f"the sliding joint {names[0]!r}" if len(names) == 1 else

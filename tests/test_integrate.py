@@ -151,3 +151,31 @@ def test_failed_batch_member_takes_negligible_steps():
     assert len(after) > 0
     np.testing.assert_allclose(after[:, 1], FROZEN_STEP * h)
     assert np.all(after[:, 2] <= 2)  # negligible steps: Newton converges at once
+
+
+def test_a_sliding_joint_moving_more_than_half_an_element_is_a_failed_step():
+    """``sliding_jumped``: a step that moves a sliding coordinate by more than
+    ``max_sliding_step`` (0.5) of the element it starts in is taken for a spurious
+    Newton solution (M2 at ρ∞ = 0.5, h = 1 ms from rest at s₀ = 0.493 m converged to
+    s = 0.710 m in its first step, 0.65 of an element, and then went on oscillating
+    until the trolley left the cable; with the check the step is redone in substeps
+    and the run is the one at ρ∞ = 0.9). On an uneven track (elements alternate 1:2),
+    the bound follows the element the joint starts in, in both directions."""
+    from ancf_jax.integrate import RunOptions, sliding_jumped
+
+    track = uneven_arc(8, 1.0, 1.2)
+    lengths = np.asarray(track.element_lengths)[:8]
+    system, state = track_model(track, 0.5 * lengths[0]).build()  # in element 0 (short)
+    q0 = np.asarray(state.q)
+    i = system.sliding_offset
+
+    def moved(ds, start=0.5 * lengths[0]):
+        old, new = q0.copy(), q0.copy()
+        old[i], new[i] = start, start + ds
+        return bool(sliding_jumped(system, old, new, RunOptions().max_sliding_step))
+
+    assert RunOptions().max_sliding_step == 0.5
+    for sign in (1.0, -1.0):
+        assert not moved(sign * 0.49 * lengths[0]) and moved(sign * 0.51 * lengths[0])
+    start_long = lengths[0] + 0.5 * lengths[1]  # in element 1, twice as long
+    assert not moved(-0.9 * lengths[0], start_long) and moved(-1.1 * lengths[0], start_long)
