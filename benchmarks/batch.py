@@ -17,6 +17,7 @@ extrapolated beyond, flagged) and pool (``Pool(cpu_count)``, spawn; pool start-u
 reported separately, batch wall time measured).
 
     python -m benchmarks.batch [--quick]
+    python -m benchmarks.batch --s0-only [--quick]   (only the M2 s₀ rows, into batch.json)
 """
 
 from __future__ import annotations
@@ -117,17 +118,23 @@ def s0_batch(plan, exudyn, dense=False) -> dict:
         compile_s = res[0].compile_time_s
         res = simulate_batch(systems, states, **kw)
         wall = res[0].info["batch_wall_time_s"]
+        s0s = s0_variants(n)
+        failed = [dict(s0=float(s), status=r.status, time_s=float(r.failure_time))
+                  for s, r in zip(s0s, res) if r.status != "ok"]
         row = dict(size=n, ancf_jax=dict(compile_s=compile_s, batch_run_s=wall, per_simulation_s=wall / n,
-                                         ok=sum(r.status == "ok" for r in res)))
+                                         ok=sum(r.status == "ok" for r in res), failed=failed))
         final = [np.asarray(C.ancf_output("M2", r))[-1] for r in res]
         if exudyn:
             ex = [C.run_exudyn("M2", b[0], b[1], t_end=plan["t_end"], dt=plan["dt"], output_dt=C.GRID)
                   for b in built[:n]]
             per = C.median([r.run_s for r in ex])
+            # a failed member's output stops at its failure: compare members ok in both codes
+            both = [i for i in range(n) if res[i].status == "ok" and ex[i].status == "ok"]
             row["exudyn"] = dict(serial_total_s=sum(r.run_s + r.setup_s for r in ex), median_run_s=per,
-                                 ok=sum(r.status == "ok" for r in ex),
+                                 ok=sum(r.status == "ok" for r in ex), compared=len(both),
                                  final_point1_max_difference_to_ancf_m=float(max(
-                                     np.max(np.abs(np.asarray(r.y)[-1] - f)) for r, f in zip(ex, final))))
+                                     (np.max(np.abs(np.asarray(ex[i].y)[-1] - final[i])) for i in both),
+                                     default=float("nan"))))
             row["per_simulation_ratio_vs_one_exudyn_run"] = row["ancf_jax"]["per_simulation_s"] / per
         rows.append(row)
         print(f"s0 batch {n}: ancf_jax {wall:.2f} s ({wall / n * 1e3:.1f} ms/sim, compile {compile_s:.1f} s)"
@@ -226,6 +233,23 @@ def main(argv=None, *, quick=None, exudyn=None):
     return write("batch", out)
 
 
+def rerun_s0(argv=None):
+    """``python -m benchmarks.batch --s0-only [--quick]``: run the M2 s₀ rows again and
+    replace them in an existing batch.json of the same mode (the M1 rows, which take
+    half an hour in full mode, are kept)."""
+    quick, exudyn = C.section_options(__doc__, argv, None, None)
+    path = RESULTS / "batch.json"
+    data = json.loads(path.read_text())
+    if bool(data.get("quick")) != quick:
+        raise SystemExit(f"{path} holds a {'quick' if data.get('quick') else 'full'} run: run the whole section")
+    data["s0"] = s0_batch((QUICK if quick else FULL)["s0"], exudyn)
+    data["s0"]["command"] = "python -m benchmarks.batch --s0-only" + (" --quick" if quick else "")
+    return write("batch", data)
+
+
 if __name__ == "__main__":
     import sys
-    print(main(sys.argv[1:]))
+    if "--s0-only" in sys.argv:
+        print(rerun_s0([a for a in sys.argv[1:] if a != "--s0-only"]))
+    else:
+        print(main(sys.argv[1:]))

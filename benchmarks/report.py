@@ -109,14 +109,19 @@ def targets(data: dict) -> list:
             detail = (f"batch of {size}{' (256 not run in quick mode)' if size != 256 else ''}: "
                       f"{ms(rows_b[size]['ancf_jax']['per_simulation_s'])} per simulation vs "
                       f"{ms(b['exudyn_serial']['median_run_s'])} per Exudyn run")
+            if 1 in rows_b:
+                one = rows_b[1]["ancf_jax"]["per_simulation_s"]
+                detail += (f"; what dominates: the arithmetic of every member on "
+                           f"{data['batch'].get('stamp', {}).get('cores', '?')} CPU cores. vmap amortises the "
+                           f"per-operation overhead (batch of 1: {ms(one)} per simulation, "
+                           f"{one / rows_b[size]['ancf_jax']['per_simulation_s']:.2g}× more) but adds no "
+                           f"arithmetic units; the target needs "
+                           f"{rows_b[size]['per_simulation_ratio_vs_one_exudyn_run'] / 0.05:.2g}× more (GPU row)")
         else:
             detail = _missing(b) or "no batch rows"
     rows.append(("batch_256", value, detail))
     rows.append(("batch_256_gpu", *_gpu_batch_target(data)))
-    g = data.get("gradient", {})
-    rows.append(("gradient", g.get("ratio_value_and_grad_to_forward"),
-                 (f"forward {f(g.get('median_forward_s'))} s, value+grad {f(g.get('median_value_and_grad_s'))} s"
-                  if g else "not run")))
+    rows.append(("gradient", *_gradient_target(data.get("gradient", {}))))
     c = data.get("compile_time", {})
     detail = "not run"
     if c.get("m1"):
@@ -397,12 +402,39 @@ def _s0_batch(s):
         rows.append([r["size"], f(a["compile_s"]), f(a["batch_run_s"]), ms(a["per_simulation_s"]),
                      f"{a['ok']}/{r['size']}",
                      ms(e["median_run_s"]) if e else "not run", f"{e['ok']}/{r['size']}" if e else "",
-                     f(e["final_point1_max_difference_to_ancf_m"]) if e else "",
+                     (f(e["final_point1_max_difference_to_ancf_m"])
+                      + (f" ({e['compared']} ok in both)" if "compared" in e else "")) if e else "",
                      f(r["per_simulation_ratio_vs_one_exudyn_run"]) if e else ""])
     out.append(table(["variants", "ancf_jax compile [s]", "ancf_jax batch run [s]", "per simulation", "ok",
                       "one Exudyn run", "Exudyn ok", "final point 1 max diff [m]",
                       "ancf_jax per sim. / one Exudyn run"], rows))
+    failed = max((r["ancf_jax"].get("failed", []) for r in s["rows"]), key=len, default=[])
+    if failed:
+        out.append("\nancf_jax members that stopped (largest batch): "
+                   + "; ".join(f"s₀ = {x['s0']:.3f} m: {x['status']} at t = {x['time_s']:.3g} s" for x in failed)
+                   + ". A stopped member keeps its last state (reported, never silently continued).\n")
+    if s.get("command"):
+        out.append(f"\n_s₀ rows: `{s['command']}`._\n")
     return "".join(out)
+
+
+def _gradient_target(g):
+    """(ratio, detail) of the gradient target: at equal accuracy when the refinement
+    sweep found a setting within tolerance, else at the solver's defaults."""
+    if not g or "median_forward_s" not in g:
+        return None, f"section failed: {g['error']}" if g.get("error") else "not run"
+    detail = (f"forward {f(g['median_forward_s'])} s, value+grad {f(g['median_value_and_grad_s'])} s "
+              f"(default refinement)")
+    if g.get("ratio_at_equal_accuracy") is None:
+        return g.get("ratio_value_and_grad_to_forward"), detail
+    row = next(r for r in g["refinement_sweep"] if r["refinement"] == g["chosen_refinement"])
+    detail = (f"at equal accuracy (gradient within {g['gradient_tolerance']:g} of the most refined): "
+              f"refinement {row['refinement']}, value+grad {f(row['median_value_and_grad_s'])} s, forward "
+              f"{f(g['median_forward_s'])} s; the backward pass solves the transposed tangent system of "
+              f"every step ({row['refinement'] + 1} solves and residual VJPs); "
+              + ("the default refinement" if row["default"] else
+                 f"at the default refinement {f(g['ratio_value_and_grad_to_forward'])}"))
+    return g["ratio_at_equal_accuracy"], detail
 
 
 def sec_gradient(d):
@@ -432,6 +464,18 @@ def sec_gradient(d):
         out.append(f"\nGradient (AD): {[f(g, 6) for g in d['gradient']]}; central differences: "
                    f"{[f(g, 6) for g in d['gradient_fd']]}; relative difference "
                    f"{[f(x, 2) for x in d['gradient_rel_difference']]}.\n")
+        if d.get("refinement_sweep"):
+            sweep = d["refinement_sweep"]
+            out.append(f"\nIterative refinement of the tangent solves (equal accuracy: each gradient component "
+                       f"within {d['gradient_tolerance']:g} of the refinement-{sweep[-1]['refinement']} "
+                       f"gradient):\n\n")
+            out.append(table(["refinement", "compile [s]", "median value+grad [s]", "/ forward",
+                              "max relative difference to the most refined", "chosen"],
+                             [[f"{r['refinement']}{' (default)' if r['default'] else ''}", f(r["compile_s"]),
+                               f(r["median_value_and_grad_s"]), f(r["ratio_to_forward"]),
+                               "reference" if r is sweep[-1] else f(r["rel_difference_to_reference"], 2),
+                               "✓" if r["refinement"] == d.get("chosen_refinement") else ""]
+                              for r in sweep]))
     out.append(_source(d))
     return "".join(out)
 
