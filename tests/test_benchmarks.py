@@ -45,8 +45,16 @@ def synthetic(tmp_path):
                          dt=1e-3, theta0=[0.03, 1e-6], loss="own", identification_module_available=False,
                          compile_forward_s=1.0, compile_value_and_grad_s=2.0, median_forward_s=0.1,
                          median_value_and_grad_s=0.25, median_finite_differences_s=0.4,
-                         ratio_value_and_grad_to_forward=2.5, ratio_fd_to_forward=4.0,
-                         gradient=[1.0, 2.0], gradient_fd=[1.0, 2.0], gradient_rel_difference=[1e-6, 1e-6]))
+                         ratio_value_and_grad_to_forward=3.5, ratio_fd_to_forward=4.0,
+                         gradient=[1.0, 2.0], gradient_fd=[1.0, 2.0], gradient_rel_difference=[1e-6, 1e-6],
+                         # the default (refinement 4) misses the target, refinement 2 is
+                         # within tolerance of refinement 8 and meets it
+                         refinement_sweep=[dict(refinement=r, default=r == 4, gradient=[1.0, 2.0], compile_s=2.0,
+                                                median_value_and_grad_s=0.1 * x, ratio_to_forward=x,
+                                                rel_difference_to_reference=e)
+                                           for r, x, e in ((1, 2.0, 1e-4), (2, 2.5, 1e-7), (4, 3.5, 1e-11),
+                                                           (8, 4.5, 0.0))],
+                         gradient_tolerance=1e-6, chosen_refinement=2, ratio_at_equal_accuracy=2.5))
     put("scaling", dict(section="scaling", exudyn=True, t_end=0.1, dt=1e-3, fit_from=24,
                         exponent=dict(ancf_jax=1.3, exudyn=1.0),
                         rows=[dict(elements=n, steps=100, ancf_compile_s=1.0,
@@ -82,7 +90,9 @@ def test_report_renders_from_json_only(tmp_path):
     text = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
     line = next(ln for ln in text.splitlines() if ln.startswith("| per-step cost"))
     assert "not measured" in line and "not run up to 192" in line and "p = 1.3" in line
-    assert "| met |" in next(v for k, v in lines.items() if k.startswith("value + gradient"))
+    grad_line = next(v for k, v in lines.items() if k.startswith("value + gradient"))
+    assert "| met |" in grad_line and "refinement 2" in grad_line and "at the default refinement 3.5" in grad_line
+    assert "| 2 | 2 | 0.25 | 2.5 | 1e-07 | ✓ |" in text and "| 8 | 2 | 0.45 | 4.5 | reference |  |" in text
     assert "not measured" in next(v for k, v in lines.items() if k.startswith("batch of 256"))
     assert "Exudyn disabled" in text and "This section failed" in text and "boom" in text
     assert "cmd single_run" in text
