@@ -130,12 +130,13 @@ FROZEN_STEP = 1e-6
 
 
 def step_status(system: System, old: Carry, new: Carry, converged, options: RunOptions):
-    """Failure code of a step (OK if none)."""
+    """Failure code of a step (OK if none); ``old`` None checks ``new`` alone (no
+    sliding-jump check: the adaptive diffrax solvers have no step to compare)."""
     finite = (jnp.all(jnp.isfinite(new.q)) & jnp.all(jnp.isfinite(new.v))
               & jnp.all(jnp.isfinite(new.lam)))
     code = jnp.where(finite, OK, NAN)
     code = jnp.where((code == OK) & ~converged, NEWTON, code)
-    if sliding_beams(system):
+    if sliding_beams(system) and old is not None:  # old: None for checks of single states
         code = jnp.where((code == OK) & sliding_jumped(system, old.q, new.q, options.max_sliding_step),
                          SLIDING_JUMP, code)
     if system.n_constraints:

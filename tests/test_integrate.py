@@ -179,3 +179,10 @@ def test_a_sliding_joint_moving_more_than_half_an_element_is_a_failed_step():
         assert not moved(sign * 0.49 * lengths[0]) and moved(sign * 0.51 * lengths[0])
     start_long = lengths[0] + 0.5 * lengths[1]  # in element 1, twice as long
     assert not moved(-0.9 * lengths[0], start_long) and moved(-1.1 * lengths[0], start_long)
+    # the adaptive (diffrax) path checks single states (no previous step): no jump check
+    from ancf_jax.integrate import step_status
+    from ancf_jax.integrators.base import OK, Carry
+    z = np.zeros(3)
+    lam = np.zeros(system.n_constraints)
+    single = Carry(state.t, state.q, state.v, state.q, state.q, lam, z, z)
+    assert int(step_status(system, None, single, np.array(True), RunOptions())) == OK
