@@ -6,7 +6,8 @@ and the three-mesh M2 batch (12, 18, 24 elements padded to 24, M2's run settings
 through ``simulate_batch``. Reported: ``compile_time_s`` of the run (tracing, lowering
 and XLA compilation of the initial-state and chunk programs) and the wall time of the
 whole first call (compile + a short run). M2's static initial states are built (or read
-from results/cache) before the clock starts.
+from results/cache) before the clock starts. Then, each in another fresh process, the
+same two programs of each case split into tracing + lowering and XLA compilation.
 
     python -m benchmarks.compile_time [--quick]
 """
@@ -35,6 +36,8 @@ def child(which: str) -> dict:
         return dict(compile_s=r.compile_time_s, first_call_s=time.perf_counter() - t0, status=r.status)
     if which == "M1-parts":
         return _m1_parts()
+    if which == "M2-parts":
+        return _m2_parts()
     from ancf_jax.simulation import simulate_batch
     built = [C.m2(n, pad_to=max(M2_COUNTS)) for n in M2_COUNTS]
     opts = C.ancf_settings("M2")
@@ -45,34 +48,49 @@ def child(which: str) -> dict:
                 status=[r.status for r in rs], solver_options=opts)
 
 
-def _m1_parts() -> dict:
-    """Where M1's compile time goes: tracing + lowering vs XLA compilation, for the
-    initial-state program and the 500-step chunk program (as ``simulate`` builds them)."""
+def _program_parts(system, state, solver_options, *, batched) -> dict:
+    """Where a first call's compile time goes: tracing + lowering vs XLA compilation,
+    for the initial-state program and the chunk program, built exactly as
+    ``simulate`` (``batched``: ``simulate_batch``) builds them for the child runs above
+    (t_end = 0.05 s, dt = 1 ms)."""
     import jax.numpy as jnp
 
     from ancf_jax import simulation as S
-    from ancf_jax.integrate import RunOptions
-
-    from . import cases as C
-    system, state = C.m1(6)
-    solver = S.make_solver("generalized-alpha")
+    solver, options, (n_int, sub, h, _), (per_chunk, _) = S._prepare(
+        0.05, 1e-3, "generalized-alpha", None, 1e-6, False, 6, "return", None, solver_options,
+        batched=batched)
+    solver = solver.forward_only()  # as S._run_fixed
+    init_fn, chunk_fn = (S._init_batch, S._chunk_batch) if batched else (S._init_single, S._chunk_single)
     out = {}
     t0 = time.perf_counter()
-    low = S._init_single.lower(system, state, solver)
+    low = init_fn.lower(system, state, solver)
     t1 = time.perf_counter()
     init = low.compile()
     t2 = time.perf_counter()
     out["init_lower_s"], out["init_xla_s"] = t1 - t0, t2 - t1
     loop, ctx = init(system, state, solver)
-    args = (system, loop, ctx, solver, jnp.asarray(1e-3), jnp.asarray(0.05), S.STEPS_PER_CHUNK, 1,
-            RunOptions(max_halvings=6))
+    args = (system, loop, ctx, solver, jnp.asarray(h), jnp.asarray(n_int * sub * h), per_chunk, sub, options)
     t0 = time.perf_counter()
-    low = S._chunk_single.lower(*args)
+    low = chunk_fn.lower(*args)
     t1 = time.perf_counter()
     low.compile()
     t2 = time.perf_counter()
     out["chunk_lower_s"], out["chunk_xla_s"] = t1 - t0, t2 - t1
     return out
+
+
+def _m1_parts() -> dict:
+    from . import cases as C
+    return _program_parts(*C.m1(6), None, batched=False)
+
+
+def _m2_parts() -> dict:
+    from ancf_jax.simulation import stack
+
+    from . import cases as C
+    built = [C.m2(n, pad_to=max(M2_COUNTS)) for n in M2_COUNTS]
+    return _program_parts(stack([b[0] for b in built]), stack([b[1] for b in built]), C.ancf_settings("M2"),
+                          batched=True)
 
 
 def measure(which: str) -> dict:
@@ -103,6 +121,8 @@ def main(argv=None, *, quick=None, exudyn=None):
     m2 = measure("M2")
     print(f"compile M2 batch {M2_COUNTS}: {m2['compile_s']:.1f} s (first call {m2['first_call_s']:.1f} s)",
           flush=True)
+    m2["parts"] = measure("M2-parts")
+    print(f"  M2 parts: {m2['parts']}", flush=True)
     return write("compile_time", dict(section="compile_time", quick=quick, m1=m1, m2_batch=m2,
                                       m2_counts=M2_COUNTS,
                                       command="python -m benchmarks.run" + (" --quick" if quick else "")

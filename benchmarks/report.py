@@ -123,17 +123,16 @@ def targets(data: dict) -> list:
     rows.append(("batch_256_gpu", *_gpu_batch_target(data)))
     rows.append(("gradient", *_gradient_target(data.get("gradient", {}))))
     c = data.get("compile_time", {})
-    detail = "not run"
-    if c.get("m1"):
-        detail = f"first call {f(c['m1']['first_call_s'])} s"
-        parts = c["m1"].get("parts")
-        if parts:
-            detail += (f"; separately: chunk program trace+lower {f(parts['chunk_lower_s'])} s + XLA "
-                       f"{f(parts['chunk_xla_s'])} s, initial-state program {f(parts['init_lower_s'])} s + "
-                       f"{f(parts['init_xla_s'])} s")
-    rows.append(("compile_m1", c.get("m1", {}).get("compile_s"), detail))
-    rows.append(("compile_m2", c.get("m2_batch", {}).get("compile_s"),
-                 f"first call {f(c['m2_batch']['first_call_s'])} s" if c.get("m2_batch") else "not run"))
+    for key, name in (("compile_m1", "m1"), ("compile_m2", "m2_batch")):
+        detail = "not run"
+        if c.get(name):
+            detail = f"first call {f(c[name]['first_call_s'])} s"
+            parts = c[name].get("parts")
+            if parts:
+                detail += (f"; separately: chunk program trace+lower {f(parts['chunk_lower_s'])} s + XLA "
+                           f"{f(parts['chunk_xla_s'])} s, initial-state program {f(parts['init_lower_s'])} s + "
+                           f"{f(parts['init_xla_s'])} s")
+        rows.append((key, c.get(name, {}).get("compile_s"), detail))
     s = data.get("scaling", {})
     counts = [r["elements"] for r in s.get("rows", [])]
     detail = (f"fit over {[n for n in counts if n >= s.get('fit_from', 24)]} elements"
