@@ -46,10 +46,10 @@ class RunOptions(eqx.Module):
         drift_tolerance: largest accepted constraint violation max|Φ| [m] (and rad).
         locate_crossings: split steps at node crossings of sliding joints.
         crossing_iterations: regula-falsi iterations to locate a crossing.
-        max_halvings: when a step fails (Newton not converged, non-finite state), redo
-            it in substeps, halving down to h / 2^max_halvings and growing back after
-            successes (0: no retries; a ``while_loop``, so reverse-mode differentiation
-            needs 0).
+        max_halvings: when a step fails (Newton not converged, non-finite state,
+            sliding jump), redo it in substeps, halving down to h / 2^max_halvings and
+            growing back after successes (0: no retries; a ``while_loop``, so
+            reverse-mode differentiation needs 0).
         max_sliding_step: largest move of a sliding coordinate in one step, as a
             fraction of the length of the element it starts in; a larger move is taken
             for a spurious Newton solution (SLIDING_JUMP), retried like a failed step.
@@ -129,16 +129,27 @@ def sliding_jumped(system: System, q_old, q_new, max_step: float):
 FROZEN_STEP = 1e-6
 
 
-def step_status(system: System, old: Carry, new: Carry, converged, options: RunOptions):
-    """Failure code of a step (OK if none); ``old`` None checks ``new`` alone (no
-    sliding-jump check: the adaptive diffrax solvers have no step to compare)."""
+def step_rejected(system: System, old: Carry | None, new: Carry, converged, options: RunOptions):
+    """Code of a step the solver failed to take (OK if none): non-finite state (NAN),
+    Newton not converged (NEWTON), spurious jump of a sliding joint (SLIDING_JUMP).
+    These are the failures a smaller step can cure (``_step_with_retries``). ``old``
+    None checks ``new`` alone (no jump check: the adaptive diffrax solvers have no
+    step to compare)."""
     finite = (jnp.all(jnp.isfinite(new.q)) & jnp.all(jnp.isfinite(new.v))
               & jnp.all(jnp.isfinite(new.lam)))
     code = jnp.where(finite, OK, NAN)
     code = jnp.where((code == OK) & ~converged, NEWTON, code)
-    if sliding_beams(system) and old is not None:  # old: None for checks of single states
+    if sliding_beams(system) and old is not None:
         code = jnp.where((code == OK) & sliding_jumped(system, old.q, new.q, options.max_sliding_step),
                          SLIDING_JUMP, code)
+    return code
+
+
+def step_status(system: System, old: Carry | None, new: Carry, converged, options: RunOptions):
+    """Failure code of a step (OK if none): :func:`step_rejected`, then a constraint
+    violation above ``drift_tolerance`` (DRIFT) and a sliding joint off its beam
+    (LEFT_BEAM)."""
+    code = step_rejected(system, old, new, converged, options)
     if system.n_constraints:
         viol = jnp.max(jnp.abs(system.constraint(new.q, new.t)))
         code = jnp.where((code == OK) & ~(viol <= options.drift_tolerance), DRIFT, code)
@@ -221,9 +232,10 @@ def _crossing(system, integrator, carry, new, h, context, options):
 
 
 def _step_with_retries(system, integrator, carry, h, context, options):
-    """One step of size h, redone as a sequence of smaller steps if it fails (Newton
-    not converged, NaN): the step is halved after a failure and doubled again (up to
-    h) after a success, down to h / 2^max_halvings (see RunOptions).
+    """One step of size h, redone as a sequence of smaller steps if it fails
+    (:func:`step_rejected`: NaN, Newton not converged, sliding jump): the step is
+    halved after a failure and doubled again (up to h) after a success, down to
+    h / 2^max_halvings (see RunOptions).
 
     One while loop holds the only copy of the integrator's step in the compiled
     program (a separate first attempt would double the compile time); under vmap only
@@ -244,9 +256,7 @@ def _step_with_retries(system, integrator, carry, h, context, options):
         c, first, done, h_try, iters, _, attempt = st
         dt = jnp.minimum(h_try, h - done)
         new, info = integrator.step(system, c, dt, context)
-        good = (info.converged & jnp.all(jnp.isfinite(new.q)) & jnp.all(jnp.isfinite(new.v))
-                & jnp.all(jnp.isfinite(new.lam))
-                & ~sliding_jumped(system, c.q, new.q, options.max_sliding_step))
+        good = step_rejected(system, c, new, info.converged, options) == OK
         first = jax.tree.map(lambda a, b: jnp.where(attempt == 0, a, b), new, first)
         c = jax.tree.map(lambda a, b: jnp.where(good, a, b), new, c)
         done = jnp.where(good, done + dt, done)

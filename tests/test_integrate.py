@@ -186,3 +186,11 @@ def test_a_sliding_joint_moving_more_than_half_an_element_is_a_failed_step():
     lam = np.zeros(system.n_constraints)
     single = Carry(state.t, state.q, state.v, state.q, state.q, lam, z, z)
     assert int(step_status(system, None, single, np.array(True), RunOptions())) == OK
+    # a step status sees the jump (and so do the retries, through step_rejected)
+    from ancf_jax.integrators.base import SLIDING_JUMP
+    from ancf_jax.integrate import step_rejected
+    for ds, expected in ((0.4, OK), (0.6, SLIDING_JUMP)):
+        q1 = q0.copy()
+        q1[i] += ds * lengths[0]
+        moved_state = Carry(state.t, q1, state.v, q1, q1, lam, z, z)
+        assert int(step_rejected(system, single, moved_state, np.array(True), RunOptions())) == expected
