@@ -97,6 +97,44 @@ class Beam(eqx.Module):
             e, e_ref, self.mesh.element_lengths)
         return jnp.where(self.mesh.active[:, None, None], h, 0.0)
 
+    def element_tangent(self, nodes, velocities, damping_coef):
+        """Linearization of the elastic and stiffness-proportional damping forces of
+        every element for a Newton matrix, shape (n_max, 8, 8), zero when inactive:
+
+            ∂f/∂e + c_v ∂f/∂ė = K(e) + β ∂(K(e) ė)/∂e + c_v β K(e),
+            f(e, ė) = ∂U/∂e + β K(e) ė,
+
+        with K the Hessian of the element strain energy (Eq. 8), ė the element
+        velocities and c_v = ``damping_coef`` (γ' of an implicit integrator, 0 in
+        statics). One ``jax.jacfwd`` of f along (δe, c_v δe) per element; the β term
+        (a third derivative of U contracted with ė) is only computed for β ≠ 0. The
+        mass-proportional part α M ė is linear and enters with the mass
+        (:func:`ancf_jax.dae.iteration_matrix`).
+        """
+        e = self.mesh.element_coordinates(nodes)
+        ed = self.mesh.element_coordinates(velocities)
+        e_ref = self.mesh.reference_elements
+        ea = self.section.axial_stiffness
+        ei = self.section.bending_stiffness
+
+        def grad_u(x, er, l):
+            return jax.grad(strain_energy)(x, er, l, ea, ei, self.formulation)
+
+        def with_damping():
+            def one(ee, eed, er, l):
+                def f(x):
+                    g, kw = jax.jvp(lambda y: grad_u(y, er, l), (x,), (eed + damping_coef * (x - ee),))
+                    return g + self.beta * kw
+                return jax.jacfwd(f)(ee)
+            return jax.vmap(one)(e, ed, e_ref, self.mesh.element_lengths)
+
+        def without():
+            return jax.vmap(lambda ee, er, l: jax.jacfwd(lambda x: grad_u(x, er, l))(ee))(
+                e, e_ref, self.mesh.element_lengths)
+
+        h = jax.lax.cond(self.beta != 0.0, with_damping, without)
+        return jnp.where(self.mesh.active[:, None, None], h, 0.0)
+
     def stiffness(self, nodes) -> BlockTridiagonal:
         """Assembled tangent stiffness (block tridiagonal, 4×4 node blocks)."""
         return BlockTridiagonal.from_element_matrices(self.element_stiffness(nodes))

@@ -28,6 +28,7 @@ import numpy as np
 
 from .linalg import (BlockTridiagonal, SaddleFactor, SaddleMatrix, factor_chain, factor_saddle, solve_saddle,
                      solve_symmetric_implicit)
+from .forces import force_tangent
 from .system import System
 
 
@@ -157,28 +158,40 @@ def project_position(system: System, q, t, *, chain_factor=None, iterations: int
     return jax.lax.fori_loop(0, iterations, newton_step, q)
 
 
-def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac) -> SaddleMatrix:
-    """Newton matrix of implicit integrators,
-    [[M β' + C γ' + K + (λ·Φ)_qq, Φ_qᵀ], [Φ_q, 0]], in bordered form.
+def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac, load_factor=1.0) -> SaddleMatrix:
+    """Newton matrix of implicit integrators: the exact linearization of the residual
 
-    Beam blocks: M_b (β' + α_b γ') + K_b (1 + β_b γ') with K_b the tangent stiffness
-    from the per-element Hessians of the strain energy (Rayleigh damping, Eq. 11).
-    Border block: M_border β'. Constraint Hessian (λ·Φ)_qq: the joints are linear in
-    the beam coordinates (Eqs. 19–20 are linear in e), so only its border rows and
-    columns are non-zero; they are computed exactly by one ``jacfwd`` over the few
-    border coordinates (rigid-body and sliding coordinates). The coupling of a
-    massless sliding coordinate to the cable through λ·S'(s) is essential for Newton
-    convergence. Left out (a modified Newton method converges without them): force-
-    element Jacobians and the derivative of β K v with respect to q.
+        r(q, λ) = M q̈ − Q(q, v, t) + Φ_q(q)ᵀ λ,   Φ(q, t),
+
+    with q̈ = q̈⁰ + β' Δq and v = v⁰ + γ' Δq along a correction Δq (β' = γ' = 0:
+    statics), in bordered form::
+
+        [[M β' − ∂Q/∂q − γ' ∂Q/∂v + (λ·Φ)_qq, Φ_qᵀ], [Φ_q, 0]]
+
+    Written from the physics once, by autodiff, keeping the structure:
+
+    * beam blocks: M_b (β' + α_b γ') plus, per element, the Jacobian of the elastic
+      and stiffness-proportional damping force along (δe, γ' δe)
+      (:meth:`ancf_jax.beam.Beam.element_tangent`: K (1 + β_b γ') + β_b ∂(K ė)/∂e);
+    * border block: M_border β' and the constraint Hessian (λ·Φ)_qq in the border rows
+      and columns, by one ``jacfwd`` over the few border coordinates (rigid-body and
+      sliding coordinates). The joints are linear in the beam coordinates (Eqs. 19–20
+      are linear in e), so its chain–chain block is zero; the coupling of a massless
+      sliding coordinate to the cable through λ·S'(s) is essential for Newton;
+    * force elements: each element's exact local linearization
+      (:func:`ancf_jax.forces.force_tangent`) over the coordinates it acts on,
+      added as a low-rank term (auxiliary unknowns of :class:`SaddleMatrix`), so a
+      spring between any two points, or a user-written law, is in the matrix.
+
+    ``load_factor`` scales the applied loads (statics' load stepping).
     """
     chain = None
     if system.chain_size:
         parts = []
         for i, b in enumerate(system.beams):
-            nodes = system.beam_nodes(q, i)
-            m = b.mass()
-            k = b.stiffness(nodes)
-            parts.append(m.scale(beta_p + b.alpha * gamma_p) + k.scale(1.0 + b.beta * gamma_p))
+            nodes, vel = system.beam_nodes(q, i), system.beam_nodes(v, i)
+            k = BlockTridiagonal.from_element_matrices(b.element_tangent(nodes, vel, gamma_p))
+            parts.append(b.mass().scale(beta_p + b.alpha * gamma_p) + k)
         chain = BlockTridiagonal.concatenate(parts)
     bi = border_indices(system)
     border = jnp.diag(system.border_mass_diagonal() * beta_p)
@@ -190,4 +203,14 @@ def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac) -> Sadd
         h = jax.jacfwd(grad_lam_phi)(q[bi])  # (n, n_b): ∂²(λ·Φ)/∂q ∂q_border
         border = border + h[bi]
         coupling = h[system.chain_slice()]
-    return saddle_matrix(system, chain, border, jac, coupling)
+    matrix = saddle_matrix(system, chain, border, jac, coupling)
+    if system.forces:
+        perm = solver_permutation(system)
+        m = system.n_constraints
+        ps, as_ = [], []
+        for f in system.forces:
+            p, a = force_tangent(f, system, q, v, t, gamma_p, load_factor)
+            ps.append(jnp.concatenate([p[:, perm], jnp.zeros((p.shape[0], m), p.dtype)], axis=1))
+            as_.append(a)
+        matrix = matrix.with_low_rank(jnp.concatenate(ps), jax.scipy.linalg.block_diag(*as_))
+    return matrix

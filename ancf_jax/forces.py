@@ -10,6 +10,13 @@ element splits into three parts so that the energy balance can be kept:
 
 Point forces map to generalized forces through the point's Jacobian by one
 vector-Jacobian product, Q = J_pᵀ F, never a hand-written Jacobian.
+
+Newton matrix. Implicit integrators and statics need ∂Q/∂q and ∂Q/∂v of every force
+element; :func:`force_tangent` computes them by forward-mode autodiff of
+:meth:`AbstractForce.generalized_force` restricted to the coordinates the element acts
+on (:meth:`AbstractForce.coordinates`: the points' element or body coordinates), so a
+user-written law enters the Newton matrix exactly like a built-in one, at a cost set by
+the element's few coordinates, not by the size of the system.
 """
 
 from __future__ import annotations
@@ -46,6 +53,48 @@ class AbstractForce(eqx.Module):
         """Generalized prescribed load, shape (n,)."""
         return jnp.zeros_like(q)
 
+    def coordinates(self, system, q):
+        """Indices of q the element depends on and acts on (its generalized force is
+        zero elsewhere), int array of fixed length; None (the default): any
+        coordinate. The Newton matrix couples these coordinates
+        (:func:`force_tangent`); None is exact for any force but couples all
+        coordinates (cost O(n²)): an element acting at points returns its points'
+        :meth:`~ancf_jax.points.AbstractPoint.coordinates`."""
+        return None
+
+    def generalized_force(self, system, q, v, t, load_factor=1.0):
+        """Q(q, v, t) of the element: −∂V/∂q + dissipative + load_factor · applied, shape (n,)."""
+        f = -jax.grad(lambda qq: self.potential(system, qq, t))(q)
+        return f + self.dissipative_force(system, q, v) + load_factor * self.applied_force(system, q, v, t)
+
+
+def force_tangent(force: AbstractForce, system, q, v, t, damping_coef, load_factor=1.0):
+    """Linearization of one force element for a Newton matrix.
+
+    With P the (k, n) selection of the element's coordinates (repeated indices
+    counted once), returns ``(P, A)`` with
+
+        A = −P (∂Q/∂q + c_v ∂Q/∂v) Pᵀ,   shape (k, k),
+
+    c_v = ``damping_coef`` (γ' of an implicit integrator, 0 in statics), so that the
+    element's contribution to the Newton matrix is Pᵀ A P (exact when Q depends on
+    and acts on these coordinates only). A is one ``jax.jacfwd`` over the k local
+    coordinates of :meth:`AbstractForce.generalized_force`.
+    """
+    n = q.shape[0]
+    idx = force.coordinates(system, q)
+    idx = jnp.arange(n) if idx is None else jnp.asarray(idx)
+    k = idx.shape[0]
+    earlier = jnp.arange(k)[:, None] > jnp.arange(k)[None, :]
+    first = ~jnp.any((idx[:, None] == idx[None, :]) & earlier, axis=1)
+    p = jax.nn.one_hot(idx, n, dtype=q.dtype) * first[:, None]
+
+    def local(d):
+        dq = p.T @ d
+        return p @ force.generalized_force(system, q + dq, v + damping_coef * dq, t, load_factor)
+
+    return p, -jax.jacfwd(local)(jnp.zeros(k, q.dtype))
+
 
 class PointForce(AbstractForce):
     """A force F·f(t) [N] at a point, fixed in direction (not a follower load).
@@ -61,6 +110,9 @@ class PointForce(AbstractForce):
         f = self.force if self.time_function is None else self.force * self.time_function(t)
         return point_load(system, self.point, q, f)
 
+    def coordinates(self, system, q):
+        return self.point.coordinates(system, q)
+
 
 class PointTorque(AbstractForce):
     """A torque τ·f(t) [N·m] on rigid body ``body`` (index)."""
@@ -72,6 +124,9 @@ class PointTorque(AbstractForce):
     def applied_force(self, system, q, v, t):
         tau = self.torque if self.time_function is None else self.torque * self.time_function(t)
         return jnp.zeros_like(q).at[system.body_offset(self.body) + 2].add(tau)
+
+    def coordinates(self, system, q):
+        return jnp.array([system.body_offset(self.body) + 2])
 
 
 class SpringDamper(AbstractForce):
@@ -101,3 +156,6 @@ class SpringDamper(AbstractForce):
         ell_dot = jax.jvp(lambda qq: self.length(system, qq), (q,), (v,))[1]
         _, vjp = jax.vjp(lambda qq: self.length(system, qq), q)
         return vjp(-self.damping * ell_dot)[0]
+
+    def coordinates(self, system, q):
+        return jnp.concatenate([self.a.coordinates(system, q), self.b.coordinates(system, q)])

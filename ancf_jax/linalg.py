@@ -194,32 +194,84 @@ class SaddleMatrix(eqx.Module):
     and E (n_b, n_b) dense. The border holds rigid-body and sliding coordinates and
     the Lagrange multipliers of the joints. Solving costs O(n_c n_b b²) + O(n_b³):
     linear in the number of elements.
+
+    Auxiliary unknowns. The last ``n_aux`` border rows and columns may hold auxiliary
+    unknowns z that carry a low-rank term outside the block-tridiagonal pattern: a
+    force element coupling coordinates P x (any elements, any bodies) with a local
+    matrix A_f adds Pᵀ A_f P, written as z = A_f P x (rows [A_f P, −I]) and Pᵀ z in the
+    rows of x (columns). The operator on the primary unknowns x (size ``size``) is the
+    Schur complement of the −I block, A₁₁ + A₁₂ A₂₁: :meth:`matvec` and the solves act
+    on x alone (z is eliminated); :meth:`to_dense` is the extended matrix.
     """
 
     chain: BlockTridiagonal | None
     b: jnp.ndarray
     c: jnp.ndarray
     e: jnp.ndarray
+    n_aux: int = eqx.field(static=True, default=0)
 
     @property
     def chain_size(self) -> int:
         return 0 if self.chain is None else self.chain.size
 
-    def matvec(self, x):
-        """A x for x of size n_c + n_b (chain entries first), shape (n,)."""
+    @property
+    def size(self) -> int:
+        """Number of primary unknowns (auxiliary ones excluded)."""
+        return self.chain_size + self.e.shape[0] - self.n_aux
+
+    def _extended_matvec(self, x):
         if self.chain is None:
             return self.e @ x
         n_c = self.chain.size
         xc, xb = x[:n_c], x[n_c:]
         return jnp.concatenate([self.chain.matvec(xc) + self.b @ xb, self.c @ xc + self.e @ xb])
 
+    def matvec(self, x):
+        """A x for x of size :attr:`size` (chain entries first), shape (size,)."""
+        if not self.n_aux:
+            return self._extended_matvec(x)
+        z = self._extended_matvec(jnp.concatenate([x, jnp.zeros(self.n_aux, x.dtype)]))[-self.n_aux:]
+        return self._extended_matvec(jnp.concatenate([x, z]))[:-self.n_aux]
+
     def to_dense(self):
-        """The dense saddle-point matrix (for tests and small systems)."""
+        """The dense (extended) saddle-point matrix (for tests and small systems)."""
         if self.chain is None:
             return self.e
         top = jnp.concatenate([self.chain.to_dense(), self.b], axis=1)
         bottom = jnp.concatenate([self.c, self.e], axis=1)
         return jnp.concatenate([top, bottom], axis=0)
+
+    def effective_dense(self):
+        """The dense operator on the primary unknowns (auxiliary ones eliminated)."""
+        a = self.to_dense()
+        if not self.n_aux:
+            return a
+        n = self.size
+        return a[:n, :n] + a[:n, n:] @ a[n:, :n]
+
+    def with_low_rank(self, p, a):
+        """This matrix plus pᵀ a p (p (k, size): the selection of the coupled
+        unknowns in solver order; a (k, k)) as k auxiliary unknowns (class docstring)."""
+        k = p.shape[0]
+        if k == 0:
+            return self
+        n_c = self.chain_size
+        n_prim_b = self.e.shape[0] - self.n_aux
+        # split the existing border into primary and auxiliary parts
+        b1, b2 = self.b[:, :n_prim_b], self.b[:, n_prim_b:]
+        c1, c2 = self.c[:n_prim_b], self.c[n_prim_b:]
+        e11, e12 = self.e[:n_prim_b, :n_prim_b], self.e[:n_prim_b, n_prim_b:]
+        e21, e22 = self.e[n_prim_b:, :n_prim_b], self.e[n_prim_b:, n_prim_b:]
+        pc, pb = p[:, :n_c], p[:, n_c:]
+        ap_c, ap_b = a @ pc, a @ pb
+        na = self.n_aux
+        zeros = jnp.zeros
+        b = jnp.concatenate([b1, b2, pc.T], axis=1)
+        c = jnp.concatenate([c1, c2, ap_c], axis=0)
+        e = jnp.block([[e11, e12, pb.T],
+                       [e21, e22, zeros((na, k))],
+                       [ap_b, zeros((k, na)), -jnp.eye(k, dtype=a.dtype)]])
+        return SaddleMatrix(self.chain, b, c, e, n_aux=na + k)
 
 
 class SaddleFactor(eqx.Module):
@@ -232,6 +284,7 @@ class SaddleFactor(eqx.Module):
     lu: tuple                    # LU of the Schur complement (or of the dense matrix)
     dense: bool = eqx.field(static=True, default=False)
     n_chain: int = eqx.field(static=True, default=0)
+    n_aux: int = eqx.field(static=True, default=0)
 
 
 def factor_saddle(a: SaddleMatrix, *, dense: bool = False,
@@ -243,14 +296,14 @@ def factor_saddle(a: SaddleMatrix, *, dense: bool = False,
     n_c = a.chain_size
     if dense or n_c == 0:
         return SaddleFactor(None, None, None, lu_factor(a.to_dense()),
-                            dense=True, n_chain=n_c)
+                            dense=True, n_chain=n_c, n_aux=a.n_aux)
     cf = factor_chain(a.chain) if chain_factor is None else chain_factor
     n_b = a.e.shape[0]
     if n_b == 0:
         return SaddleFactor(cf, jnp.zeros((n_c, 0)), a.c, (), dense=False, n_chain=n_c)
     x = solve_chain(cf, a.b)
     s = a.e - a.c @ x
-    return SaddleFactor(cf, x, a.c, lu_factor(s), dense=False, n_chain=n_c)
+    return SaddleFactor(cf, x, a.c, lu_factor(s), dense=False, n_chain=n_c, n_aux=a.n_aux)
 
 
 def solve_symmetric_implicit(a: SaddleMatrix, f: SaddleFactor, r):
@@ -266,7 +319,16 @@ def solve_symmetric_implicit(a: SaddleMatrix, f: SaddleFactor, r):
 
 
 def solve_saddle(f: SaddleFactor, r):
-    """Solve A x = r for r of size n_c + n_b (chain entries first), shape (n,) or (n, k)."""
+    """Solve A x = r for r of size n_c + n_b (chain entries first), shape (n,) or (n, k);
+    auxiliary unknowns (:class:`SaddleMatrix`) are eliminated: r and x have the size
+    of the primary unknowns."""
+    if f.n_aux:
+        pad = jnp.zeros((f.n_aux,) + r.shape[1:], r.dtype)
+        return _solve_saddle(f, jnp.concatenate([r, pad], axis=0))[:-f.n_aux]
+    return _solve_saddle(f, r)
+
+
+def _solve_saddle(f: SaddleFactor, r):
     if f.dense:
         return lu_solve(f.lu, r)
     n_c = f.n_chain

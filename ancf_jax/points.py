@@ -25,6 +25,12 @@ class AbstractPoint(eqx.Module):
         """A material direction attached to the point (body axis or beam slope), shape (2,)."""
         raise NotImplementedError
 
+    def coordinates(self, system, q):
+        """Indices of q that the position and direction of the point depend on, int
+        array of fixed length (the Newton matrix of a force element acting at the
+        point couples only these; :meth:`ancf_jax.forces.AbstractForce.coordinates`)."""
+        raise NotImplementedError
+
 
 class GroundPoint(AbstractPoint):
     """A fixed point of the ground."""
@@ -36,6 +42,9 @@ class GroundPoint(AbstractPoint):
 
     def direction(self, system, q):
         return jnp.array([1.0, 0.0])
+
+    def coordinates(self, system, q):
+        return jnp.zeros((0,), int)
 
 
 class BodyPoint(AbstractPoint):
@@ -49,6 +58,9 @@ class BodyPoint(AbstractPoint):
 
     def direction(self, system, q):
         return rotation(system.body_pose(q, self.body)[2])[:, 0]
+
+    def coordinates(self, system, q):
+        return system.body_offset(self.body) + jnp.arange(3)
 
 
 class BeamNode(AbstractPoint):
@@ -64,6 +76,10 @@ class BeamNode(AbstractPoint):
         """The nodal slope r' (not normalized)."""
         return system.beam_nodes(q, self.beam)[self.node, 2:]
 
+    def coordinates(self, system, q):
+        node = jnp.mod(self.node, system.beams[self.beam].n_nodes)
+        return system.beam_offset(self.beam) + 4 * node + jnp.arange(4)
+
 
 class BeamPoint(AbstractPoint):
     """The material point of beam ``beam`` at fixed reference arc length ``s`` [m]."""
@@ -76,6 +92,9 @@ class BeamPoint(AbstractPoint):
 
     def direction(self, system, q):
         return system.beams[self.beam].slope(system.beam_nodes(q, self.beam), self.s)
+
+    def coordinates(self, system, q):
+        return element_coordinates(system, self.beam, self.s)
 
 
 class SlidingPoint(AbstractPoint):
@@ -91,3 +110,15 @@ class SlidingPoint(AbstractPoint):
     def direction(self, system, q):
         return system.beams[self.beam].slope(system.beam_nodes(q, self.beam),
                                              system.sliding(q, self.sliding))
+
+    def coordinates(self, system, q):
+        s = system.sliding(q, self.sliding)
+        return jnp.concatenate([element_coordinates(system, self.beam, s),
+                                jnp.array([system.sliding_offset + self.sliding])])
+
+
+def element_coordinates(system, beam: int, s):
+    """Indices in q of the 8 coordinates of the element of beam ``beam`` that holds
+    the arc length s (the nodes k and k + 1 of :meth:`ancf_jax.mesh.BeamMesh.locate`)."""
+    k, _ = system.beams[beam].mesh.locate(s)
+    return system.beam_offset(beam) + 4 * k + jnp.arange(8)
