@@ -7,7 +7,8 @@ function of arrays: ``jax.jit``, ``jax.vmap`` (batches of systems with identical
 structure, e.g. padded meshes of different element counts) and ``jax.grad`` pass
 through it.
 
-Failures (codes in :mod:`ancf_jax.integrators.base`): a non-finite state (NAN), a
+Failures (:class:`ancf_jax.failures.Failure`, checked here and nowhere else): a
+non-finite state (NAN), a
 Newton solve that did not converge (NEWTON), a constraint violation max|Φ| above
 ``drift_tolerance`` (DRIFT), a sliding coordinate outside its beam (LEFT_BEAM), a
 sliding coordinate that moved more than ``max_sliding_step`` of an element in one step,
@@ -33,8 +34,8 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from .integrators.base import (DRIFT, LEFT_BEAM, NAN, NEWTON, OK, SLIDING_JUMP, AbstractIntegrator, Carry, StepInfo,
-                               run_if)
+from .failures import Failure
+from .integrators.base import AbstractIntegrator, Carry, StepInfo, run_if
 from .joints import SlidingJoint
 from .system import State, System
 
@@ -130,34 +131,35 @@ FROZEN_STEP = 1e-6
 
 
 def step_rejected(system: System, old: Carry | None, new: Carry, converged, options: RunOptions):
-    """Code of a step the solver failed to take (OK if none): non-finite state (NAN),
-    Newton not converged (NEWTON), spurious jump of a sliding joint (SLIDING_JUMP).
+    """:class:`~ancf_jax.failures.Failure` of a step the solver failed to take (OK if
+    none): non-finite state (NAN), Newton not converged (NEWTON), spurious jump of a
+    sliding joint (SLIDING_JUMP), i.e. the ``retryable`` failures.
     These are the failures a smaller step can cure (``_step_with_retries``). ``old``
     None checks ``new`` alone (no jump check: the adaptive diffrax solvers have no
     step to compare)."""
     finite = (jnp.all(jnp.isfinite(new.q)) & jnp.all(jnp.isfinite(new.v))
               & jnp.all(jnp.isfinite(new.lam)))
-    code = jnp.where(finite, OK, NAN)
-    code = jnp.where((code == OK) & ~converged, NEWTON, code)
+    code = jnp.where(finite, Failure.OK, Failure.NAN)
+    code = jnp.where((code == Failure.OK) & ~converged, Failure.NEWTON, code)
     if sliding_beams(system) and old is not None:
-        code = jnp.where((code == OK) & sliding_jumped(system, old.q, new.q, options.max_sliding_step),
-                         SLIDING_JUMP, code)
+        code = jnp.where((code == Failure.OK) & sliding_jumped(system, old.q, new.q, options.max_sliding_step),
+                         Failure.SLIDING_JUMP, code)
     return code
 
 
 def step_status(system: System, old: Carry | None, new: Carry, converged, options: RunOptions):
-    """Failure code of a step (OK if none): :func:`step_rejected`, then a constraint
-    violation above ``drift_tolerance`` (DRIFT) and a sliding joint off its beam
-    (LEFT_BEAM)."""
+    """:class:`~ancf_jax.failures.Failure` of a step (OK if none): :func:`step_rejected`,
+    then a constraint violation above ``drift_tolerance`` (DRIFT) and a sliding joint off
+    its beam (LEFT_BEAM)."""
     code = step_rejected(system, old, new, converged, options)
     if system.n_constraints:
         viol = jnp.max(jnp.abs(system.constraint(new.q, new.t)))
-        code = jnp.where((code == OK) & ~(viol <= options.drift_tolerance), DRIFT, code)
+        code = jnp.where((code == Failure.OK) & ~(viol <= options.drift_tolerance), Failure.DRIFT, code)
     for j, b in sliding_beams(system).items():
         s = system.sliding(new.q, j)
         length = system.beams[b].mesh.length
         out = (s < 0.0) | (s > length)
-        code = jnp.where((code == OK) & out, LEFT_BEAM, code)
+        code = jnp.where((code == Failure.OK) & out, Failure.LEFT_BEAM, code)
     return code
 
 
@@ -256,7 +258,7 @@ def _step_with_retries(system, integrator, carry, h, context, options):
         c, first, done, h_try, iters, _, attempt = st
         dt = jnp.minimum(h_try, h - done)
         new, info = integrator.step(system, c, dt, context)
-        good = step_rejected(system, c, new, info.converged, options) == OK
+        good = step_rejected(system, c, new, info.converged, options) == Failure.OK
         first = jax.tree.map(lambda a, b: jnp.where(attempt == 0, a, b), new, first)
         c = jax.tree.map(lambda a, b: jnp.where(good, a, b), new, c)
         done = jnp.where(good, done + dt, done)
@@ -285,7 +287,7 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
 
     def one_step(c, _):
         loop, iters, maxit, ncross = c
-        active = (loop.status == OK) & (loop.carry.t < t_stop - 0.5 * h)
+        active = (loop.status == Failure.OK) & (loop.carry.t < t_stop - 0.5 * h)
         # Under vmap lax.cond becomes a select: a member that has failed or finished
         # still computes a step, whose result is discarded. It takes a negligible step
         # (h · FROZEN_STEP from its last good state, where Newton converges at once), so
@@ -306,7 +308,7 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
                 it = it + extra[0]
                 conv = jnp.where(crossed, extra[1], conv)
             code = step_status(system, loop.carry, new2, conv, options)
-            ok = code == OK
+            ok = code == Failure.OK
             carry = jax.tree.map(lambda a, b: jnp.where(ok, a, b), new2, loop.carry)
             nl = LoopState(carry, code, jnp.where(ok, loop.fail_time, new2.t))
             return nl, iters + it, jnp.maximum(maxit, it), ncross + crossed.astype(jnp.int32)
@@ -329,7 +331,7 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
 def initial_loop(system: System, integrator: AbstractIntegrator, state: State, context) -> LoopState:
     """Initial :class:`LoopState` (consistent accelerations and multipliers)."""
     carry = integrator.init(system, state, context)
-    return LoopState(carry, jnp.asarray(OK), jnp.asarray(jnp.nan))
+    return LoopState(carry, jnp.asarray(Failure.OK), jnp.asarray(jnp.nan))
 
 
 def segment_of(loop: LoopState) -> Segment:  # noqa: D401

@@ -38,7 +38,8 @@ import numpy as np
 
 from .errors import ModelError, SimulationError
 from .integrate import LoopState, RunOptions, initial_loop, integrate_fixed, segment_of, sliding_beams
-from .integrators.base import OK, REASONS, AbstractIntegrator, Carry
+from .failures import Failure
+from .integrators.base import AbstractIntegrator, Carry
 from .integrators.diffrax_solvers import KINDS as DIFFRAX_KINDS
 from .integrators.diffrax_solvers import DiffraxSolver, succeeded
 from .integrators.generalized_alpha import GeneralizedAlpha
@@ -145,7 +146,7 @@ def trajectory(system: System, state: State, solver, *, t_end: float, dt: float,
     There are no retries in substeps here (they are a while loop, which reverse-mode
     autodiff cannot pass): when a step fails (Newton not converged, NaN, drift), the
     state is frozen from then on and ``loop.status`` holds the failure code
-    (:data:`~ancf_jax.integrators.base.REASONS`). Check ``loop.status == 0`` before
+    (:class:`~ancf_jax.failures.Failure`). Check ``loop.status == 0`` before
     using a value or gradient; a frozen run's gradient is meaningless. Reduce ``dt``
     if it fails.
     """
@@ -177,26 +178,17 @@ def _joints_that_left(system: System, q, v, t_last: float, t_fail: float) -> tup
 
 
 def _failure_message(status: int, t_fail: float, system: System, options: RunOptions,
-                     last=None) -> str:
-    reason = REASONS.get(status, "unknown")
-    if reason == "nan":
-        why = "the state became NaN or infinite (the step may be too large for the solver)"
-    elif reason == "newton":
-        why = "the Newton iteration did not converge (reduce dt)"
-    elif reason == "constraint_drift":
-        why = (f"the constraint violation exceeded drift_tolerance = {options.drift_tolerance:g} "
-               "(reduce dt or tighten the solver tolerances)")
-    elif reason == "sliding_jump":
-        why = (f"a sliding joint moved more than {options.max_sliding_step:g} of an element length in one "
-               "step: the Newton iteration found a spurious solution (reduce dt, or raise rho_inf towards 1)")
-    elif reason == "left_beam":
+                     last=None, max_steps=None) -> str:
+    """The one-line message of a :class:`~ancf_jax.failures.Failure`, with the run's
+    numbers (tolerances, the joint that left its beam)."""
+    failure = Failure(status)
+    context = dict(drift_tolerance=options.drift_tolerance, max_sliding_step=options.max_sliding_step,
+                   max_steps=max_steps)
+    if failure is Failure.LEFT_BEAM:
         names = _joints_that_left(system, *(last or (None, None, 0.0)), t_fail)
-        which = (f"the sliding joint {names[0]!r}" if len(names) == 1 else
-                 "a sliding joint (" + ", ".join(names) + ")")
-        why = f"{which} left its beam at an end"
-    else:
-        why = "the solver failed"
-    return f"simulation stopped at t = {t_fail:.6g} s: {why}"
+        context["joint"] = (f"the sliding joint {names[0]!r}" if len(names) == 1 else
+                            "a sliding joint (" + ", ".join(names) + ")")
+    return failure.message(t_fail, **context)
 
 
 def _progress(total: int, enabled: bool | None, desc: str):
@@ -322,7 +314,7 @@ def _run_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, op
         segs.append(seg)
         ran += 1
         bar.update(min(per_chunk, n_int - c * per_chunk) * (t_end - t0) / n_int)
-        if np.all(np.asarray(loop.status) != OK):
+        if np.all(np.asarray(loop.status) != Failure.OK):
             break
     bar.close()
     return segs, loop, compile_s, time.perf_counter() - tw, ran
@@ -338,16 +330,16 @@ def _results_fixed(system, segs, loop, solver, n_int, sub, h, t0, compile_s, wal
            for k in ("t", "q", "v", "acc", "lam", "work", "iterations")}
     del axis
     status = int(take(loop.status))
-    t_fail = float(take(loop.fail_time)) if status != OK else None
+    t_fail = float(take(loop.fail_time)) if status != Failure.OK else None
     n_rows = 1 + n_int
-    if status != OK:
+    if status != Failure.OK:
         n_rows = _rows_until_failure(cat["t"], n_rows)
     cat = {k: v[:n_rows] for k, v in cat.items()}
     cat["t"] = t0 + h * sub * np.arange(n_rows)  # exact grid (the carry accumulates h)
-    message = "" if status == OK else _failure_message(
+    message = "" if status == Failure.OK else _failure_message(
         status, t_fail, system, options, last=(cat["q"][-1], cat["v"][-1], float(cat["t"][-1])))
     return Results(system=system, solver=solver_name(solver), dt=float(h), wall_time_s=wall,
-                   compile_time_s=compile_s, status=REASONS[status], failure_time=t_fail,
+                   compile_time_s=compile_s, status=Failure(status).reason, failure_time=t_fail,
                    message=message, info=dict(steps=int((n_rows - 1) * sub), substeps_per_output=sub),
                    **cat)
 
@@ -455,7 +447,7 @@ def _simulate_diffrax(system, state, solver, t0, n_int, out_dt, dt, per_chunk, n
                 iterations=[np.zeros(1, int)])
     tw = time.perf_counter()
     bar = _progress(n_int * out_dt, progress, name)
-    status, t_fail, steps = OK, None, 0
+    status, t_fail, steps = Failure.OK, None, 0
     y, t_start = y0, t0
     for c in range(n_chunks):
         ts = ts_all[c * per_chunk:(c + 1) * per_chunk]
@@ -465,10 +457,10 @@ def _simulate_diffrax(system, state, solver, t0, n_int, out_dt, dt, per_chunk, n
         codes = np.asarray(status_fn(system, q, v, lam, jnp.asarray(ts)))
         if not bool(ok):
             bad = ~np.all(np.isfinite(np.asarray(q)), axis=1)
-            codes = np.where(bad & (codes == OK), 99, codes)
-            if np.all(codes == OK):
-                codes[-1] = 99
-        keep = len(ts) if np.all(codes == OK) else int(np.argmax(codes != OK))
+            codes = np.where(bad & (codes == Failure.OK), Failure.ADAPTIVE, codes)
+            if np.all(codes == Failure.OK):
+                codes[-1] = Failure.ADAPTIVE
+        keep = len(ts) if np.all(codes == Failure.OK) else int(np.argmax(codes != Failure.OK))
         for k, arr in zip(("t", "q", "v", "acc", "lam", "work"), (ts, q, v, acc, lam, w)):
             rows[k].append(np.asarray(arr)[:keep])
         rows["iterations"].append(np.zeros(keep, int))
@@ -481,17 +473,14 @@ def _simulate_diffrax(system, state, solver, t0, n_int, out_dt, dt, per_chunk, n
     bar.close()
     wall = time.perf_counter() - tw
     cat = {k: np.concatenate(v)[: n_int + 1] for k, v in rows.items()}
-    REASONS.setdefault(99, "solver")
     message = ""
-    if status != OK:
-        message = (_failure_message(status, t_fail, system, options,
-                                    last=(cat["q"][-1], cat["v"][-1], float(cat["t"][-1])))
-                   if status != 99 else
-                   f"simulation stopped at t = {t_fail:.6g} s: the adaptive solver failed "
-                   f"(step size underflow, max_steps = {solver.max_steps} reached, or NaN)")
+    if status != Failure.OK:
+        message = _failure_message(status, t_fail, system, options,
+                                   last=(cat["q"][-1], cat["v"][-1], float(cat["t"][-1])),
+                                   max_steps=solver.max_steps)
     res = Results(system=system, solver=name, dt=float(dt), wall_time_s=wall, compile_time_s=compile_s,
-                  status="ok" if status == OK else REASONS[status], failure_time=t_fail,
+                  status=Failure(status).reason, failure_time=t_fail,
                   message=message, info=dict(steps=steps), **cat)
-    if status != OK and on_failure == "raise":
-        raise SimulationError(message, time=t_fail, reason=REASONS[status], results=res)
+    if status != Failure.OK and on_failure == "raise":
+        raise SimulationError(message, time=t_fail, reason=Failure(status).reason, results=res)
     return res

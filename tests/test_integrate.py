@@ -181,15 +181,15 @@ def test_a_sliding_joint_moving_more_than_half_an_element_is_a_failed_step():
     assert not moved(-0.9 * lengths[0], start_long) and moved(-1.1 * lengths[0], start_long)
     # the adaptive (diffrax) path checks single states (no previous step): no jump check
     from ancf_jax.integrate import step_status
-    from ancf_jax.integrators.base import OK, Carry
+    from ancf_jax.failures import Failure
+    from ancf_jax.integrators.base import Carry
     z = np.zeros(3)
     lam = np.zeros(system.n_constraints)
     single = Carry(state.t, state.q, state.v, state.q, state.q, lam, z, z)
-    assert int(step_status(system, None, single, np.array(True), RunOptions())) == OK
+    assert int(step_status(system, None, single, np.array(True), RunOptions())) == Failure.OK
     # a step status sees the jump (and so do the retries, through step_rejected)
-    from ancf_jax.integrators.base import SLIDING_JUMP
     from ancf_jax.integrate import step_rejected
-    for ds, expected in ((0.4, OK), (0.6, SLIDING_JUMP)):
+    for ds, expected in ((0.4, Failure.OK), (0.6, Failure.SLIDING_JUMP)):
         q1 = q0.copy()
         q1[i] += ds * lengths[0]
         moved_state = Carry(state.t, q1, state.v, q1, q1, lam, z, z)

@@ -42,7 +42,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ModelError
-from ..integrators.base import OK
+from ..failures import Failure
 from ..integrators.diffrax_solvers import DiffraxSolver
 from ..outputs import COMPONENTS, Output
 from ..simulation import compiled, make_solver, trajectory
@@ -131,7 +131,7 @@ def simulate_output(system: System, state: State, solver, layout: Layout, p):
     seg, loop = trajectory(sys, state, solver, t_end=layout.n_steps * layout.h, dt=layout.h,
                            output_dt=layout.h)
     y = jax.vmap(lambda q: output_value(sys, layout.output, q))(seg.q)
-    return y, loop.status == OK
+    return y, loop.status == Failure.OK
 
 
 def residuals(system, state, solver, layout: Layout, p, t, y, w):

@@ -5,11 +5,6 @@ from __future__ import annotations
 import equinox as eqx
 import jax.numpy as jnp
 
-# failure codes of a run (see ancf_jax.simulation)
-OK, NAN, NEWTON, DRIFT, LEFT_BEAM, SLIDING_JUMP = 0, 1, 2, 3, 4, 5
-REASONS = {OK: "ok", NAN: "nan", NEWTON: "newton", DRIFT: "constraint_drift", LEFT_BEAM: "left_beam",
-           SLIDING_JUMP: "sliding_jump"}
-
 
 class Carry(eqx.Module):
     """What a one-step integrator carries from step to step.

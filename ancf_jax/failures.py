@@ -1,0 +1,98 @@
+"""Why a run stopped: one enumeration of failures, with their messages.
+
+As diffrax's ``RESULTS``: traced code carries a failure as an integer code (a
+:class:`Failure` member is an ``int``, so ``jnp.where(bad, Failure.NEWTON, code)``
+works under ``jit`` and ``vmap``); the host turns the code into the machine-readable
+``reason`` of :class:`~ancf_jax.results.Results` and
+:class:`~ancf_jax.errors.SimulationError` and into the sentence a user reads. The
+checks that produce the codes live in one place, :mod:`ancf_jax.integrate`
+(:func:`~ancf_jax.integrate.step_rejected`, :func:`~ancf_jax.integrate.step_status`).
+"""
+
+from __future__ import annotations
+
+import enum
+
+
+class Failure(enum.IntEnum):
+    """Status of a run or a step (0: none).
+
+    ========================  ====================  ==================================
+    member                    ``reason``            cause
+    ========================  ====================  ==================================
+    ``OK``                    ``ok``                no failure
+    ``NAN``                   ``nan``               non-finite state
+    ``NEWTON``                ``newton``            Newton did not converge in a step
+    ``DRIFT``                 ``constraint_drift``  max|Φ| above ``drift_tolerance``
+    ``LEFT_BEAM``             ``left_beam``         a sliding joint off its beam
+    ``SLIDING_JUMP``          ``sliding_jump``      a sliding joint jumped in one step
+    ``ADAPTIVE``              ``solver``            an adaptive (diffrax) solver failed
+    ========================  ====================  ==================================
+
+    ``NAN``, ``NEWTON`` and ``SLIDING_JUMP`` are the failures a smaller step can cure
+    (:attr:`retryable`): the fixed-step loop redoes such a step in substeps.
+    """
+
+    OK = 0
+    NAN = 1
+    NEWTON = 2
+    DRIFT = 3
+    LEFT_BEAM = 4
+    SLIDING_JUMP = 5
+    ADAPTIVE = 6
+
+    @property
+    def reason(self) -> str:
+        """Machine-readable reason (``Results.status``, ``SimulationError.reason``)."""
+        return _REASONS[self]
+
+    @property
+    def retryable(self) -> bool:
+        """Whether a smaller step can cure it (see the class docstring)."""
+        return self in (Failure.NAN, Failure.NEWTON, Failure.SLIDING_JUMP)
+
+    def explanation(self, **context) -> str:
+        """The cause in words. ``context`` fills in the numbers the message names:
+        ``drift_tolerance``, ``max_sliding_step`` (:class:`~ancf_jax.integrate.RunOptions`),
+        ``joint`` (which sliding joint left its beam), ``max_steps`` (adaptive solvers)."""
+        return _MESSAGES[self].format(**{**_CONTEXT_DEFAULTS, **context})
+
+    def message(self, time: float, **context) -> str:
+        """One line: ``simulation stopped at t = … s: <explanation>``."""
+        return f"simulation stopped at t = {time:.6g} s: {self.explanation(**context)}"
+
+    @classmethod
+    def from_reason(cls, reason: str) -> "Failure":
+        """The member whose :attr:`reason` is ``reason``."""
+        for member in cls:
+            if member.reason == reason:
+                return member
+        raise ValueError(f"unknown failure reason {reason!r}; known: {[m.reason for m in cls]}")
+
+
+_REASONS = {
+    Failure.OK: "ok",
+    Failure.NAN: "nan",
+    Failure.NEWTON: "newton",
+    Failure.DRIFT: "constraint_drift",
+    Failure.LEFT_BEAM: "left_beam",
+    Failure.SLIDING_JUMP: "sliding_jump",
+    Failure.ADAPTIVE: "solver",
+}
+
+_MESSAGES = {
+    Failure.OK: "no failure",
+    Failure.NAN: "the state became NaN or infinite (the step may be too large for the solver)",
+    Failure.NEWTON: "the Newton iteration did not converge (reduce dt)",
+    Failure.DRIFT: ("the constraint violation exceeded drift_tolerance = {drift_tolerance:g} "
+                    "(reduce dt or tighten the solver tolerances)"),
+    Failure.LEFT_BEAM: "{joint} left its beam at an end",
+    Failure.SLIDING_JUMP: ("a sliding joint moved more than {max_sliding_step:g} of an element length in "
+                           "one step: the Newton iteration found a spurious solution (reduce dt, or raise "
+                           "rho_inf towards 1)"),
+    Failure.ADAPTIVE: ("the adaptive solver failed (step size underflow, max_steps = {max_steps} "
+                       "reached, or NaN)"),
+}
+
+_CONTEXT_DEFAULTS = dict(drift_tolerance=float("nan"), max_sliding_step=float("nan"),
+                         joint="a sliding joint", max_steps="?")
