@@ -26,9 +26,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .linalg import (BlockTridiagonal, SaddleFactor, SaddleMatrix, factor_chain, factor_saddle, solve_saddle,
-                     solve_symmetric_implicit)
+from .linalg import (AbstractSaddleSolver, AutoSaddleSolver, BlockTridiagonal, SaddleFactor, SaddleMatrix,
+                     factor_chain, solve_symmetric_implicit)
 from .forces import force_tangent
+from .newton import ModifiedNewton
 from .system import System
 
 
@@ -84,9 +85,11 @@ def mass_saddle_matrix(system: System, jac) -> SaddleMatrix:
                          jnp.diag(system.border_mass_diagonal()), jac)
 
 
-def mass_saddle_factor(system: System, jac, chain_factor=None, *, dense=False) -> SaddleFactor:
-    """Factors of [[M, Φ_qᵀ], [Φ_q, 0]] at the current Φ_q."""
-    return factor_saddle(mass_saddle_matrix(system, jac), dense=dense, chain_factor=chain_factor)
+def mass_saddle_factor(system: System, jac, chain_factor=None, *,
+                       linear_solver: AbstractSaddleSolver = AutoSaddleSolver()) -> SaddleFactor:
+    """Factors of [[M, Φ_qᵀ], [Φ_q, 0]] at the current Φ_q (``chain_factor``: the
+    constant beam mass's, :func:`mass_chain_factor`)."""
+    return linear_solver.init(mass_saddle_matrix(system, jac), chain_factor)
 
 
 def powers(system: System, q, v, t, lam):
@@ -103,13 +106,14 @@ def powers(system: System, q, v, t, lam):
 
 
 def accelerations(system: System, q, v, t, *, baumgarte: float = 0.0, chain_factor=None,
-                  dense: bool = False):
+                  linear_solver: AbstractSaddleSolver = AutoSaddleSolver()):
     """Accelerations q̈ and multipliers λ of the index-1 form (module docstring).
 
     Args:
         baumgarte: ω [rad/s] of the critically damped Baumgarte stabilization
             (0: none).
         chain_factor: precomputed factors of the beam mass (it is constant).
+        linear_solver: solver of the saddle system.
 
     Returns:
         (q̈ (n,), λ (m,)).
@@ -120,8 +124,8 @@ def accelerations(system: System, q, v, t, *, baumgarte: float = 0.0, chain_fact
     if system.n_constraints and baumgarte:
         w = baumgarte
         gamma = gamma - 2.0 * w * system.constraint_velocity(q, v, t) - w * w * system.constraint(q, t)
-    f = mass_saddle_factor(system, jac, chain_factor, dense=dense)
-    x = solve_saddle(f, to_solver_order(system, rhs_q, gamma))
+    f = mass_saddle_factor(system, jac, chain_factor, linear_solver=linear_solver)
+    x = linear_solver.compute(f, to_solver_order(system, rhs_q, gamma))
     return from_solver_order(system, x)
 
 
@@ -142,20 +146,38 @@ def project_velocity(system: System, q, v, t, factor: SaddleFactor, jac=None):
     return v + dv
 
 
-def project_position(system: System, q, t, *, chain_factor=None, iterations: int = 2, dense=False):
-    """Project q onto Φ(q, t) = 0 by ``iterations`` Newton steps of the mass-weighted
-    minimum-norm correction ``[[M, Φ_qᵀ], [Φ_q, 0]] [Δq; μ] = [0; −Φ]``."""
+#: root finder of the position projection: full Newton (Φ_q refreshed at every
+#: iteration) to 1e-12 m; usually two iterations after an explicit step
+PROJECTION_NEWTON = ModifiedNewton(tolerance=1e-12, max_iterations=4, contraction=0.0)
+
+
+def project_position(system: System, q, t, *, chain_factor=None,
+                     root_finder: ModifiedNewton = PROJECTION_NEWTON):
+    """Project q onto Φ(q, t) = 0 in the mass metric (``chain_factor``: the constant
+    beam mass's factors, reused in every iteration): the nearest point
+    argmin ½ |p − q|²_M subject to Φ(p, t) = 0, as the root of its optimality conditions
+
+        M (p − q) + Φ_p(p)ᵀ μ = 0,   Φ(p, t) = 0,
+
+    by ``root_finder`` on the matrix [[M, Φ_pᵀ], [Φ_p, 0]] (the curvature term μ·Φ_pp
+    is left out: μ vanishes at the solution when q is on the manifold, and it is of
+    the size of the drift otherwise). Differentiated implicitly."""
     if not system.n_constraints:
         return q
-    def newton_step(_, q):
-        jac = system.constraint_jacobian(q, t)
-        f = mass_saddle_factor(system, jac, chain_factor, dense=dense)
-        x = solve_saddle(f, to_solver_order(system, jnp.zeros_like(q), -system.constraint(q, t)))
-        dq, _ = from_solver_order(system, x)
-        return q + dq
+    n = system.n_coordinates
 
-    # a loop, not unrolled: one traced copy of the Jacobian and the factorization
-    return jax.lax.fori_loop(0, iterations, newton_step, q)
+    def residual(y):
+        p, mu = from_solver_order(system, y)
+        phi, vjp = jax.vjp(lambda z: system.constraint(z, t), p)
+        return to_solver_order(system, system.mass_times(p - q) + vjp(mu)[0], phi)
+
+    def linearize(y):
+        p, _ = from_solver_order(system, y)
+        return mass_saddle_matrix(system, system.constraint_jacobian(p, t))
+
+    y0 = to_solver_order(system, q, jnp.zeros(system.n_constraints, q.dtype))
+    sol = root_finder.root(residual, linearize, y0, size=n, chain_factor=chain_factor)
+    return from_solver_order(system, sol.x)[0]
 
 
 def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac, load_factor=1.0) -> SaddleMatrix:

@@ -35,13 +35,24 @@ import jax
 import jax.numpy as jnp
 
 from .failures import Failure
-from .integrators.base import AbstractIntegrator, Carry, StepInfo, run_if
+from .integrators.base import AbstractIntegrator, Carry, StepInfo
+from .newton import run_if
 from .joints import SlidingJoint
 from .system import State, System
 
 
+#: default fixed step [s] of a run (simulate, the scenario format, the CLI): M1 and M2
+#: at their validated settings (docs/theory.md, "Defaults from measurements")
+DEFAULT_DT = 1e-3
+
+#: default number of step halvings of :func:`ancf_jax.simulation.simulate` (its pure
+#: core :func:`~ancf_jax.simulation.trajectory` runs without retries, RunOptions' 0)
+DEFAULT_HALVINGS = 6
+
+
 class RunOptions(eqx.Module):
-    """Static options of a run.
+    """Static options of a run (their defaults are the defaults of simulate, the
+    scenario format and the CLI).
 
     Attributes:
         drift_tolerance: largest accepted constraint violation max|Φ| [m] (and rad).

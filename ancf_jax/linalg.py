@@ -9,6 +9,8 @@ constraints) is handled by a Schur complement in the solvers.
 
 from __future__ import annotations
 
+import abc
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -339,3 +341,65 @@ def _solve_saddle(f: SaddleFactor, r):
     xb = lu_solve(f.lu, rb - f.c @ y)
     xc = y - f.x @ xb
     return jnp.concatenate([xc, xb], axis=0)
+
+
+# ---------------------------------------------------------------------- solvers
+class AbstractSaddleSolver(eqx.Module):
+    """A linear solver for :class:`SaddleMatrix` operators (lineax style): ``init``
+    factors an operator once, ``compute`` solves with the factors as often as needed.
+
+    ``chain_factor``: known factors of the chain block (the constant beam mass), used
+    by solvers that factor the chain separately.
+    """
+
+    @abc.abstractmethod
+    def init(self, operator: SaddleMatrix, chain_factor: ChainFactor | None = None) -> SaddleFactor:
+        """Factors of ``operator``."""
+
+    def compute(self, factors: SaddleFactor, rhs):
+        """x with A x = rhs (primary unknowns; shape (n,) or (n, k))."""
+        return solve_saddle(factors, rhs)
+
+
+class BorderedChainSolver(AbstractSaddleSolver):
+    """Block Thomas on the beam chain and a dense LU of the border's Schur complement:
+    O(n_c n_b b²) + O(n_b³), linear in the number of elements."""
+
+    def init(self, operator, chain_factor=None):
+        return factor_saddle(operator, dense=False, chain_factor=chain_factor)
+
+
+class DenseLUSolver(AbstractSaddleSolver):
+    """Dense LU with partial pivoting of the whole (extended) matrix: O(n³), for small
+    systems (M1's 38 unknowns) and for GPU batches, where one batched LU beats the
+    chain's sequential scans."""
+
+    def init(self, operator, chain_factor=None):
+        return factor_saddle(operator, dense=True)
+
+
+class AutoSaddleSolver(AbstractSaddleSolver):
+    """Chosen from the structure of the operator (static shapes): the bordered chain
+    solver while the border (bodies, sliding coordinates, multipliers and the
+    auxiliary unknowns of force elements) is smaller than the chain, else dense LU
+    (no beams, or a force element coupling every coordinate)."""
+
+    def select(self, operator: SaddleMatrix) -> AbstractSaddleSolver:
+        """The solver used for ``operator``."""
+        if operator.chain_size and operator.e.shape[0] < operator.chain_size:
+            return BorderedChainSolver()
+        return DenseLUSolver()
+
+    def init(self, operator, chain_factor=None):
+        return self.select(operator).init(operator, chain_factor)
+
+
+#: the linear solvers by the names the scenario format and the CLI use
+LINEAR_SOLVERS = {"auto": AutoSaddleSolver, "bordered": BorderedChainSolver, "dense": DenseLUSolver}
+
+
+def linear_solver(name: str) -> AbstractSaddleSolver:
+    """The linear solver called ``name`` (:data:`LINEAR_SOLVERS`)."""
+    if name not in LINEAR_SOLVERS:
+        raise ValueError(f"linear_solver must be one of {', '.join(LINEAR_SOLVERS)}, got {name!r}")
+    return LINEAR_SOLVERS[name]()

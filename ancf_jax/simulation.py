@@ -37,13 +37,16 @@ import jax.numpy as jnp
 import numpy as np
 
 from .errors import ModelError, SimulationError
-from .integrate import LoopState, RunOptions, initial_loop, integrate_fixed, segment_of, sliding_beams
+from .integrate import (DEFAULT_DT, DEFAULT_HALVINGS, LoopState, RunOptions, initial_loop, integrate_fixed,
+                        segment_of, sliding_beams)
 from .failures import Failure
 from .integrators.base import AbstractIntegrator, Carry
 from .integrators.diffrax_solvers import KINDS as DIFFRAX_KINDS
 from .integrators.diffrax_solvers import DiffraxSolver, succeeded
 from .integrators.generalized_alpha import GeneralizedAlpha
 from .integrators.rk4 import RK4
+from .linalg import LINEAR_SOLVERS
+from .newton import ModifiedNewton
 from .results import Results
 from .system import State, System
 from .validation import check_positive
@@ -52,12 +55,38 @@ SOLVERS = ("generalized-alpha", "rk4") + DIFFRAX_KINDS
 DEFAULT_SOLVER = "generalized-alpha"
 
 
+#: flat option names (scenario format, ``solver_options``) of the generalized-α root
+#: finder, and the :class:`~ancf_jax.newton.ModifiedNewton` fields they set
+ROOT_FINDER_OPTIONS = {"newton_tol": "tolerance", "max_iterations": "max_iterations",
+                       "refresh_every": "refresh_every", "contraction": "contraction",
+                       "refresh_first": "refresh_first"}
+
+
 def make_solver(name: str, **options):
-    """A solver instance from its name (see module docstring) and options."""
+    """A solver instance from its name (see module docstring) and flat options, as the
+    scenario format's ``[solver.<name>]`` tables and ``solver_options`` give them.
+
+    The one translation from flat options to the composed solver: generalized-α's
+    ``newton_tol``, ``max_iterations``, ``refresh_every``, ``contraction`` and
+    ``refresh_first`` configure its root finder (:data:`ROOT_FINDER_OPTIONS`);
+    ``linear_solver`` (``"auto"``, ``"bordered"``, ``"dense"``,
+    :data:`ancf_jax.linalg.LINEAR_SOLVERS`) its linear solver; the rest are fields of
+    the integrator. Defaults are those of the classes."""
     if name not in SOLVERS:
         raise ModelError(f"solver must be one of {', '.join(SOLVERS)}, got {name!r}")
+    options = dict(options)
+    ls = options.pop("linear_solver", None)
+    if ls is not None:
+        if ls not in LINEAR_SOLVERS:
+            raise ModelError(f"linear_solver must be one of {', '.join(LINEAR_SOLVERS)}, got {ls!r}")
+        ls = LINEAR_SOLVERS[ls]()
     if name == "generalized-alpha":
-        return GeneralizedAlpha(**options)
+        rf = {ROOT_FINDER_OPTIONS[k]: options.pop(k) for k in list(options) if k in ROOT_FINDER_OPTIONS}
+        if ls is not None:
+            rf["linear_solver"] = ls
+        return GeneralizedAlpha(root_finder=ModifiedNewton(**rf), **options)
+    if ls is not None:
+        options["linear_solver"] = ls
     if name == "rk4":
         return RK4(**options)
     return DiffraxSolver(kind=name, **options)
@@ -199,15 +228,16 @@ def _progress(total: int, enabled: bool | None, desc: str):
 
 def simulate(system: System, state: State, *, t_end: float, dt: float | None = None,
              solver: Any = DEFAULT_SOLVER, output_dt: float | None = None,
-             drift_tolerance: float = 1e-6, locate_crossings: bool = False,
-             max_halvings: int = 6, on_failure: str = "raise", progress: bool | None = None,
+             drift_tolerance: float = RunOptions.drift_tolerance,
+             locate_crossings: bool = RunOptions.locate_crossings,
+             max_halvings: int = DEFAULT_HALVINGS, on_failure: str = "raise", progress: bool | None = None,
              chunks: int | None = None, solver_options: dict | None = None) -> Results:
     """Simulate ``system`` from ``state`` until ``t_end``.
 
     Args:
         t_end: end time [s] (> 0; the run starts at ``state.t``).
         dt: step [s] of fixed-step solvers, initial step of adaptive ones
-            (default 1e-3 s).
+            (default :data:`~ancf_jax.integrate.DEFAULT_DT`, 1 ms).
         solver: a name (see module docstring) or a solver instance.
         output_dt: output interval [s] (default: every step).
         drift_tolerance: stop when max|Φ| exceeds this [m].
@@ -227,7 +257,7 @@ def simulate(system: System, state: State, *, t_end: float, dt: float | None = N
         SimulationError: the run failed (NaN, Newton failure, constraint drift, a
             sliding joint leaving its beam); ``err.results`` holds the results so far.
     """
-    dt = 1e-3 if dt is None else dt
+    dt = DEFAULT_DT if dt is None else dt
     solver, options, (n_int, sub, h, out_dt), (per_chunk, n_chunks) = _prepare(
         t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings, on_failure,
         chunks, solver_options)
@@ -366,8 +396,10 @@ def unstack(tree, index):
 
 def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
                    solver: Any = DEFAULT_SOLVER, output_dt: float | None = None,
-                   drift_tolerance: float = 1e-6, locate_crossings: bool = False,
-                   max_halvings: int = 6, on_failure: str = "raise", progress: bool | None = None,
+                   drift_tolerance: float = RunOptions.drift_tolerance,
+                   locate_crossings: bool = RunOptions.locate_crossings,
+                   max_halvings: int = DEFAULT_HALVINGS, on_failure: str = "raise",
+                   progress: bool | None = None,
                    chunks: int | None = None, solver_options: dict | None = None) -> list[Results]:
     """Simulate several systems of identical structure in ONE jitted, vmapped program.
 
@@ -388,7 +420,7 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
     if len(treedefs) != 1 or len({tuple(np.shape(x) for x in jax.tree.leaves(s)) for s in systems}) != 1:
         raise ModelError("simulate_batch needs systems of identical structure and shapes: build them "
                          "from the same model with the same pad_to")
-    dt = 1e-3 if dt is None else dt
+    dt = DEFAULT_DT if dt is None else dt
     solver, options, (n_int, sub, h, _), (per_chunk, n_chunks) = _prepare(
         t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings, on_failure,
         chunks, solver_options, batched=True)

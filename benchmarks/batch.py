@@ -5,7 +5,7 @@ the trolley's start s₀ (each its own static equilibrium) against Exudyn run se
 Variants: M1 with 6 elements, α uniform in [0.01, 0.05] 1/s and E uniform in
 [180, 220] GPa (seeded). Each code runs with its equal-accuracy settings from
 ``results/single_run.json`` when that exists (else h = 1 ms, default tolerances); the
-vmapped batch always uses the block-tridiagonal solver (``dense`` dropped from the
+vmapped batch always uses the block-tridiagonal solver (``linear_solver`` dropped from the
 chosen options: the same equations, and batched dense LU is slower under vmap).
 M2 s₀ variants: 12 elements, s₀ uniform in [0.4, 1.2] m, h = 1 ms (M2's step), both
 codes from the same static states (solved per variant before the clock starts).
@@ -107,7 +107,7 @@ def s0_batch(plan, exudyn, dense=False) -> dict:
     from ancf_jax.simulation import simulate_batch
     opts = C.ancf_settings("M2")
     if dense:
-        opts = {**opts, "dense": True}
+        opts = {**opts, "linear_solver": "dense"}
     built = [C.m2(plan["n"], s0=float(s)) for s in s0_variants(max(plan["sizes"]))]
     rows = []
     for n in plan["sizes"]:
@@ -176,7 +176,7 @@ def main(argv=None, *, quick=None, exudyn=None):
     a = settings["ancf_jax"]
     rows = []
     final_ancf = {}
-    options = {k: v for k, v in a["options"].items() if k != "dense"}
+    options = {k: v for k, v in a["options"].items() if k not in ("dense", "linear_solver")}
     for n in plan["sizes"]:
         row, final_ancf[n] = m1_batch_row(system, state, n, plan, a["dt"], options)
         rows.append(row)

@@ -6,7 +6,7 @@ from ``results/batch.json``: a cross-machine ratio, stated as such).
 
 Settings: the M1 equal-accuracy settings of ancf_jax from ``results/single_run.json``
 whatever its mode (so the GPU rows run what the CPU batch rows run), else h = 1 ms;
-``dense`` is dropped as in ``batch.py`` unless ``--dense`` (batched dense LU: one
+``linear_solver`` is dropped as in ``batch.py`` unless ``--dense`` (batched dense LU: one
 batched factorization instead of the block-tridiagonal scan's many small kernels;
 written to ``results/batch_gpu_dense.json``). Not part of ``python -m benchmarks.run``
 (it needs a GPU); on a machine with one::
@@ -57,9 +57,9 @@ def main(argv=None) -> str:
         plan["t_end"] = args.t_end
     device = jax.devices()[0]
     a = settings()
-    options = {k: v for k, v in a["options"].items() if k != "dense"}
+    options = {k: v for k, v in a["options"].items() if k not in ("dense", "linear_solver")}
     if args.dense:
-        options["dense"] = True
+        options["linear_solver"] = "dense"
     name = "batch_gpu_dense" if args.dense else "batch_gpu"
     system, state = C.m1(6)
     out = dict(section="batch_gpu", quick=args.quick, exudyn=False, backend=jax.default_backend(),

@@ -37,6 +37,13 @@ TARGETS = (
 EXTRA = ("batch_gpu", "batch_gpu_dense")
 
 
+
+def _dense(options) -> bool:
+    """Whether ancf_jax ran the dense LU (``linear_solver = "dense"``; results written
+    before the solver-core rewrite say ``dense = true``)."""
+    options = options or {}
+    return bool(options.get("dense")) or options.get("linear_solver") == "dense"
+
 def load(results: Path) -> dict:
     out = {}
     for name in SECTIONS + EXTRA:
@@ -163,7 +170,7 @@ def _gpu_batch_target(data):
     if not found:
         return None, "no GPU batch of 256 (python -m benchmarks.batch_gpu on a GPU machine)"
     per, g = min(found, key=lambda x: x[0])
-    solver = "dense LU" if g["settings"]["ancf_jax"]["options"].get("dense") else "block-tridiagonal"
+    solver = "dense LU" if _dense(g["settings"]["ancf_jax"]["options"]) else "block-tridiagonal"
     detail = f"{g.get('device', 'GPU')}, {solver}: {ms(per)} per simulation (0–{g['t_end']:g} s)"
     ex = b.get("exudyn_serial")
     if not ex:
@@ -179,13 +186,13 @@ def _same_settings(gpu, batch) -> bool:
     """The GPU rows ran ancf_jax at the CPU batch's step and options (dense aside), so
     both meet the same accuracy."""
     a, c = gpu["settings"]["ancf_jax"], batch.get("settings", {}).get("ancf_jax", {})
-    strip = lambda o: {k: v for k, v in (o or {}).items() if k != "dense"}  # noqa: E731
+    strip = lambda o: {k: v for k, v in (o or {}).items() if k not in ("dense", "linear_solver")}  # noqa: E731
     return c.get("dt") is not None and abs(a["dt"] - c["dt"]) < 1e-15 and strip(a["options"]) == strip(c["options"])
 
 
 def sec_batch_gpu(d, batch):
     """Table of the GPU batch rows (benchmarks/batch_gpu.py)."""
-    solver = "dense LU" if d["settings"]["ancf_jax"]["options"].get("dense") else "block-tridiagonal solver"
+    solver = "dense LU" if _dense(d["settings"]["ancf_jax"]["options"]) else "block-tridiagonal solver"
     out = [f"## Batch throughput on a GPU ({d.get('device', '?')}, {solver})\n\n"
            f"{d['model']}, {d['parameters']}, 0–{d['t_end']:g} s, one vmapped program per size "
            f"(h = {d['settings']['ancf_jax']['dt']:g} s, options {d['settings']['ancf_jax']['options']}, "

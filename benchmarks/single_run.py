@@ -33,11 +33,11 @@ QUICK = dict(
 REFERENCE = dict(newton_tol=1e-11, refresh_every=1, max_iterations=50, rho_inf=0.9)
 #: Newton tolerance and solver option sets tried per code (a new ancf_jax set costs one
 #: compilation)
-#: (refresh_first: refactor after the first correction, for large steps; dense: dense LU,
+#: (refresh_first: refactor after the first correction, for large steps; linear_solver="dense": dense LU,
 #: for small systems; see ancf_jax.integrators.generalized_alpha)
 LARGE_STEP = dict(refresh_first=True, contraction=0.1)
-ANCF_TOLS = dict(full=({}, dict(newton_tol=1e-7), LARGE_STEP, dict(LARGE_STEP, dense=True)),
-                 quick=({}, LARGE_STEP, dict(LARGE_STEP, dense=True)))
+ANCF_TOLS = dict(full=({}, dict(newton_tol=1e-7), LARGE_STEP, dict(LARGE_STEP, linear_solver="dense")),
+                 quick=({}, LARGE_STEP, dict(LARGE_STEP, linear_solver="dense")))
 EXUDYN_TOLS = dict(full=(dict(relative_tolerance=1e-8, absolute_tolerance=1e-10),
                          dict(relative_tolerance=1e-5, absolute_tolerance=1e-8)),
                    quick=(dict(relative_tolerance=1e-8, absolute_tolerance=1e-10),))

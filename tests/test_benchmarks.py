@@ -146,7 +146,7 @@ def test_report_gpu_batch_rows_and_target(tmp_path):
         (tmp_path / f"{name}.json").write_text(json.dumps(dict(
             stamp={**STAMP, "jax_backend": "gpu"}, section="batch_gpu", quick=False, exudyn=False,
             backend="gpu", device="Test GPU", t_end=2.0, model="M1", parameters="alpha, E",
-            settings=dict(ancf_jax=dict(dt=1e-3, options=dict(dense=True) if dense else {}, source="default")),
+            settings=dict(ancf_jax=dict(dt=1e-3, options=dict(linear_solver="dense") if dense else {}, source="default")),
             rows=rows, command=f"cmd {name}")))
 
     gpu("batch_gpu", False, 0.03)

@@ -19,6 +19,7 @@ import jax.numpy as jnp
 import optimistix as optx
 
 from .. import dae
+from ..linalg import AbstractSaddleSolver, AutoSaddleSolver
 
 KINDS = ("tsit5", "dopri5", "kvaerno5")
 
@@ -32,6 +33,7 @@ class DiffraxSolver(eqx.Module):
         atol: absolute tolerance of the step-size controller.
         max_steps: steps allowed per output chunk.
         baumgarte: Baumgarte ω [rad/s] against constraint drift.
+        linear_solver: solver of the saddle system of the accelerations.
     """
 
     kind: str = eqx.field(static=True, default="tsit5")
@@ -39,7 +41,7 @@ class DiffraxSolver(eqx.Module):
     atol: float = eqx.field(static=True, default=1e-8)
     max_steps: int = eqx.field(static=True, default=10_000_000)
     baumgarte: float = eqx.field(static=True, default=50.0)
-    dense: bool = eqx.field(static=True, default=False)
+    linear_solver: AbstractSaddleSolver = AutoSaddleSolver()
 
     @property
     def order(self) -> int:
@@ -59,7 +61,7 @@ class DiffraxSolver(eqx.Module):
         def f(t, y, args):
             q, v, _ = y
             acc, lam = dae.accelerations(system, q, v, t, baumgarte=self.baumgarte,
-                                         chain_factor=context, dense=self.dense)
+                                         chain_factor=context, linear_solver=self.linear_solver)
             return v, acc, dae.powers(system, q, v, t, lam)
         return f
 
@@ -76,7 +78,7 @@ class DiffraxSolver(eqx.Module):
         """Accelerations and multipliers at saved states (vmapped), for the outputs."""
         return jax.vmap(lambda qq, vv, tt: dae.accelerations(
             system, qq, vv, tt, baumgarte=self.baumgarte, chain_factor=context,
-            dense=self.dense))(q, v, t)
+            linear_solver=self.linear_solver))(q, v, t)
 
 
 def succeeded(solution) -> jnp.ndarray:

@@ -18,6 +18,7 @@ import jax
 import jax.numpy as jnp
 
 from .. import dae
+from ..linalg import AbstractSaddleSolver, AutoSaddleSolver
 from .base import AbstractIntegrator, Carry, StepInfo
 
 
@@ -27,12 +28,12 @@ class RK4(AbstractIntegrator):
     Attributes:
         projection: project q and v onto Φ = 0, Φ̇ = 0 after every step.
         baumgarte: Baumgarte ω [rad/s] on the acceleration constraints (0: none).
-        dense: dense LU instead of the bordered block-tridiagonal solver.
+        linear_solver: solver of the saddle systems (accelerations, projections).
     """
 
     projection: bool = eqx.field(static=True, default=True)
     baumgarte: float = eqx.field(static=True, default=0.0)
-    dense: bool = eqx.field(static=True, default=False)
+    linear_solver: AbstractSaddleSolver = AutoSaddleSolver()
 
     @property
     def order(self) -> int:
@@ -43,13 +44,13 @@ class RK4(AbstractIntegrator):
 
     def _rates(self, system, q, v, t, chain_factor):
         acc, lam = dae.accelerations(system, q, v, t, baumgarte=self.baumgarte,
-                                     chain_factor=chain_factor, dense=self.dense)
+                                     chain_factor=chain_factor, linear_solver=self.linear_solver)
         return acc, lam, dae.powers(system, q, v, t, lam)
 
     def init(self, system, state, context) -> Carry:
         t = jnp.asarray(state.t, float)
         acc, lam = dae.accelerations(system, state.q, state.v, t, baumgarte=self.baumgarte,
-                                     chain_factor=context, dense=self.dense)
+                                     chain_factor=context, linear_solver=self.linear_solver)
         return Carry(t, state.q, state.v, acc, jnp.zeros_like(state.q), lam, jnp.zeros(3),
                      dae.powers(system, state.q, state.v, t, lam))
 
@@ -70,9 +71,10 @@ class RK4(AbstractIntegrator):
         q1, v1, work = q + comb[0], v + comb[1], carry.work + comb[2]
         t1 = t + h
         if self.projection and system.n_constraints:
-            q1 = dae.project_position(system, q1, t1, chain_factor=context, dense=self.dense)
+            newton = eqx.tree_at(lambda r: r.linear_solver, dae.PROJECTION_NEWTON, self.linear_solver)
+            q1 = dae.project_position(system, q1, t1, chain_factor=context, root_finder=newton)
             jac = system.constraint_jacobian(q1, t1)
-            f = dae.mass_saddle_factor(system, jac, context, dense=self.dense)
+            f = dae.mass_saddle_factor(system, jac, context, linear_solver=self.linear_solver)
             v1 = dae.project_velocity(system, q1, v1, t1, f, jac)
         acc, lam, power = self._rates(system, q1, v1, t1, context)
         info = StepInfo(jnp.zeros((), jnp.int32), jnp.array(True))

@@ -11,12 +11,19 @@ are in :mod:`ancf_jax.scenario.checks`.
 
 from __future__ import annotations
 
+import dataclasses
+
 from typing import Annotated, ClassVar, Literal, Optional, Union
 
 from pydantic import BaseModel, ConfigDict, Field
 
 from ..element.strain_energy import AXIAL_STRAINS, CURVATURES
 from ..outputs import COMPONENTS
+from ..integrate import DEFAULT_DT, RunOptions
+from ..integrators.diffrax_solvers import DiffraxSolver
+from ..integrators.generalized_alpha import GeneralizedAlpha
+from ..integrators.rk4 import RK4
+from ..newton import ModifiedNewton
 from ..simulation import SOLVERS
 from .types import Nodes4, Points2, Quadrature, TimeFunction, Vec2
 
@@ -298,42 +305,63 @@ class ModalSpec(Table):
                        "the static equilibrium, with the stress stiffness")
 
 
+def _default(cls, name: str) -> str:
+    """The default of field ``name`` of a solver class, as the docs print it (the
+    defaults are written once, in the classes)."""
+    value = {f.name: f.default for f in dataclasses.fields(cls)}[name]
+    return str(value).lower() if isinstance(value, bool) else f"{value:g}"
+
+
+LINEAR_SOLVER_DOC = ("linear solver: auto (chosen from the structure: bordered for beams), bordered "
+                     "(block-tridiagonal chain with a dense border), dense (LU of the whole matrix; "
+                     "fastest for small unbatched systems and GPU batches) (default auto)")
+
+
 class GeneralizedAlphaOptions(Table):
     """Options of the generalized-α solver (each defaults to the solver's own default)."""
 
     rho_inf: Optional[float] = key(None, ge=0.0, le=1.0, allow_inf_nan=False,
-                                   doc="spectral radius at infinity (default 0.9)")
+                                   doc=f"spectral radius at infinity (default {_default(GeneralizedAlpha, 'rho_inf')})")
     newton_tol: Optional[float] = key(None, unit="m", gt=0.0, allow_inf_nan=False,
-                                      doc="Newton tolerance on the position correction (default 1e-10)")
-    max_iterations: Optional[int] = key(None, ge=1, le=1000, doc="Newton iterations per step (default 16)")
-    refresh_every: Optional[int] = key(None, ge=1, le=1000,
-                                       doc="refactor after this many iterations (default 6)")
-    contraction: Optional[float] = key(None, gt=0.0, lt=1.0, allow_inf_nan=False,
-                                       doc="refactor when a correction shrinks by less (default 0.25)")
+                                      doc="Newton tolerance on the position correction "
+                                          f"(default {_default(ModifiedNewton, 'tolerance')})")
+    max_iterations: Optional[int] = key(None, ge=1, le=1000, doc="Newton iterations per step "
+                                        f"(default {_default(ModifiedNewton, 'max_iterations')})")
+    refresh_every: Optional[int] = key(None, ge=1, le=1000, doc="refactor after this many iterations "
+                                       f"(default {_default(ModifiedNewton, 'refresh_every')})")
+    contraction: Optional[float] = key(None, ge=0.0, lt=1.0, allow_inf_nan=False,
+                                       doc="refactor when a correction shrinks by less; 0: full Newton "
+                                           f"(default {_default(ModifiedNewton, 'contraction')})")
     refresh_first: Optional[bool] = key(None, doc="refactor after the first correction of every step "
-                                                  "(default false; for steps whose predictor is far off)")
-    velocity_projection: Optional[bool] = key(None, doc="project velocities onto the constraints (default true)")
-    dense: Optional[bool] = key(None, doc="dense LU instead of the block-tridiagonal solver (default false)")
+                                                  f"(default {_default(ModifiedNewton, 'refresh_first')}; "
+                                                  "for steps whose predictor is far off)")
+    velocity_projection: Optional[bool] = key(None, doc="project velocities onto the constraints "
+                                              f"(default {_default(GeneralizedAlpha, 'velocity_projection')})")
+    linear_solver: Optional[Literal["auto", "bordered", "dense"]] = key(None, doc=LINEAR_SOLVER_DOC)
 
 
 class RK4Options(Table):
     """Options of the RK4 solver."""
 
-    projection: Optional[bool] = key(None, doc="project onto the constraints after each step (default true)")
+    projection: Optional[bool] = key(None, doc="project onto the constraints after each step "
+                                     f"(default {_default(RK4, 'projection')})")
     baumgarte: Optional[float] = key(None, unit="rad/s", ge=0.0, allow_inf_nan=False,
-                                     doc="Baumgarte ω (default 0)")
-    dense: Optional[bool] = key(None, doc="dense LU instead of the block-tridiagonal solver (default false)")
+                                     doc=f"Baumgarte ω (default {_default(RK4, 'baumgarte')})")
+    linear_solver: Optional[Literal["auto", "bordered", "dense"]] = key(None, doc=LINEAR_SOLVER_DOC)
 
 
 class DiffraxOptions(Table):
     """Options of the adaptive diffrax solvers (tsit5, dopri5, kvaerno5)."""
 
-    rtol: Optional[float] = key(None, gt=0.0, allow_inf_nan=False, doc="relative tolerance (default 1e-6)")
-    atol: Optional[float] = key(None, gt=0.0, allow_inf_nan=False, doc="absolute tolerance (default 1e-8)")
-    max_steps: Optional[int] = key(None, ge=1, doc="steps per output chunk (default 1e7)")
+    rtol: Optional[float] = key(None, gt=0.0, allow_inf_nan=False,
+                                doc=f"relative tolerance (default {_default(DiffraxSolver, 'rtol')})")
+    atol: Optional[float] = key(None, gt=0.0, allow_inf_nan=False,
+                                doc=f"absolute tolerance (default {_default(DiffraxSolver, 'atol')})")
+    max_steps: Optional[int] = key(None, ge=1, doc="steps per output chunk "
+                                   f"(default {_default(DiffraxSolver, 'max_steps')})")
     baumgarte: Optional[float] = key(None, unit="rad/s", ge=0.0, allow_inf_nan=False,
-                                     doc="Baumgarte ω (default 50)")
-    dense: Optional[bool] = key(None, doc="dense LU instead of the block-tridiagonal solver (default false)")
+                                     doc=f"Baumgarte ω (default {_default(DiffraxSolver, 'baumgarte')})")
+    linear_solver: Optional[Literal["auto", "bordered", "dense"]] = key(None, doc=LINEAR_SOLVER_DOC)
 
 
 #: the options table that applies to each solver (the others are checked, not used)
@@ -347,12 +375,12 @@ class SolverSpec(Table):
     switches solvers without editing the file."""
 
     name: Literal[SOLVERS] = key("generalized-alpha", doc="time integrator")
-    dt: float = key(1e-3, unit="s", gt=0.0, allow_inf_nan=False,
+    dt: float = key(DEFAULT_DT, unit="s", gt=0.0, allow_inf_nan=False,
                     doc="step (fixed-step solvers) or initial step (adaptive)")
     t_end: float = key(unit="s", gt=0.0, allow_inf_nan=False, doc="end time; the run starts at t = 0")
-    drift_tolerance: float = key(1e-6, unit="m", gt=0.0, allow_inf_nan=False,
+    drift_tolerance: float = key(RunOptions.drift_tolerance, unit="m", gt=0.0, allow_inf_nan=False,
                                  doc="stop when max|Φ| exceeds this")
-    locate_crossings: bool = key(False, doc="split steps at node crossings of sliding joints")
+    locate_crossings: bool = key(RunOptions.locate_crossings, doc="split steps at node crossings of sliding joints")
     generalized_alpha: GeneralizedAlphaOptions = key(GeneralizedAlphaOptions(),
                                                      doc="options used when name = generalized-alpha")
     rk4: RK4Options = key(RK4Options(), doc="options used when name = rk4")

@@ -2,11 +2,17 @@
 
 from pathlib import Path
 
+import pytest
+
 from ancf_jax.integrators.diffrax_solvers import DiffraxSolver
 from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
 from ancf_jax.integrators.rk4 import RK4
 from ancf_jax.scenario import docs, schema
 from ancf_jax.scenario.expressions import FUNCTIONS
+from ancf_jax.errors import ModelError
+from ancf_jax.linalg import AutoSaddleSolver, BorderedChainSolver, DenseLUSolver
+from ancf_jax.newton import ModifiedNewton
+from ancf_jax.simulation import ROOT_FINDER_OPTIONS, make_solver
 
 PAGE = Path(__file__).resolve().parents[2] / "docs" / "scenario-format.md"
 
@@ -36,5 +42,21 @@ def test_solver_options_are_options_of_the_solvers():
     assert set(schema.SOLVER_TABLES) == set(classes)
     for name, table in schema.SOLVER_TABLES.items():
         options = schema.SolverSpec.model_fields[table].annotation.model_fields
-        known = set(classes[name].__dataclass_fields__)
+        # fields of the integrator, of its root finder (generalized-α) and the linear solver
+        known = set(classes[name].__dataclass_fields__) | {"linear_solver"}
+        if name == "generalized-alpha":
+            known |= set(ROOT_FINDER_OPTIONS)
         assert set(options) <= known, (name, set(options) - known)
+    assert set(ROOT_FINDER_OPTIONS.values()) <= set(ModifiedNewton.__dataclass_fields__)
+
+
+def test_flat_solver_options_configure_the_composed_solver():
+    """make_solver is the one translation from the scenario's flat options."""
+    ga = make_solver("generalized-alpha", newton_tol=1e-8, refresh_first=True, contraction=0.1,
+                     linear_solver="dense", rho_inf=0.5)
+    assert ga.rho_inf == 0.5 and ga.root_finder.tolerance == 1e-8 and ga.root_finder.refresh_first
+    assert ga.root_finder.contraction == 0.1 and isinstance(ga.linear_solver, DenseLUSolver)
+    assert isinstance(make_solver("rk4", linear_solver="bordered").linear_solver, BorderedChainSolver)
+    assert isinstance(make_solver("generalized-alpha").linear_solver, AutoSaddleSolver)
+    with pytest.raises(ModelError, match="linear_solver must be one of auto, bordered, dense"):
+        make_solver("rk4", linear_solver="sparse")

@@ -95,7 +95,7 @@ CASES = [
      "one of mass_per_length, density, mass"),
     ("solver option at the wrong level", replaced(('name = "generalized-alpha"', 'name = "generalized-alpha"\nrho_inf = 0.5')),
      "solver.rho_inf", "keys name, dt, t_end, drift_tolerance, locate_crossings, generalized_alpha, rk4, diffrax"),
-    ("option of another solver", added("[solver.rk4]\nrho_inf = 0.5"), "solver.rk4.rho_inf", "keys projection, baumgarte, dense"),
+    ("option of another solver", added("[solver.rk4]\nrho_inf = 0.5"), "solver.rk4.rho_inf", "keys projection, baumgarte, linear_solver"),
     ("rho_inf out of range", added("[solver.generalized_alpha]\nrho_inf = 1.5"),
      "solver.generalized_alpha.rho_inf", "a number 0 .. 1"),
     ("output interval below the step", replaced(("[outputs]\ndt = 1e-3", "[outputs]\ndt = 1e-4")), "outputs.dt", ">= 0.001"),
