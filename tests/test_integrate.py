@@ -120,6 +120,7 @@ def test_failed_batch_member_takes_negligible_steps():
     from ancf_jax.integrate import FROZEN_STEP
     from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
     from ancf_jax.models.m1 import m1_model
+    from ancf_jax.newton import ModifiedNewton
     from ancf_jax.simulation import simulate_batch
 
     class LoggedSteps(GeneralizedAlpha):
@@ -138,7 +139,7 @@ def test_failed_batch_member_takes_negligible_steps():
     h, t_end = 4e-3, 0.06
     _STEP_LOG.clear()
     res = simulate_batch(systems, [state] * 2, t_end=t_end, dt=h, output_dt=h, max_halvings=0,
-                         solver=LoggedSteps(max_iterations=6), on_failure="return", progress=False,
+                         solver=LoggedSteps(root_finder=ModifiedNewton(max_iterations=6)), on_failure="return", progress=False,
                          chunks=1)
     assert res[0].status == "newton" and res[1].status == "ok"
     n_ok = int(round(res[0].failure_time / h)) - 1  # steps completed before the failing one
