@@ -48,12 +48,15 @@ class NewtonSolution(eqx.Module):
     Attributes:
         x: the last iterate.
         iterations: Newton iterations taken (int).
-        converged: whether the last correction met the tolerance (bool).
+        converged: whether the stopping rule was met (bool).
+        residual_norm: ``residual_norm`` of the last residual evaluated (NaN when the
+            solve was given no norm).
     """
 
     x: jnp.ndarray
     iterations: jnp.ndarray
     converged: jnp.ndarray
+    residual_norm: jnp.ndarray
 
 
 class ModifiedNewton(eqx.Module):
@@ -61,12 +64,17 @@ class ModifiedNewton(eqx.Module):
 
     Attributes:
         tolerance: converged when max |Δx| over the first ``size`` unknowns (the
-            coordinates, not the multipliers) is at most this [m or -].
+            coordinates, not the multipliers) is at most ``tolerance · scale`` [m or -].
         max_iterations: iterations before the solve counts as not converged.
         refresh_every: refactor after this many iterations without convergence.
         contraction: refactor at the current iterate when a correction is larger than
-            this fraction of the previous one.
+            this fraction of the previous one (0: at every iteration, full Newton).
         refresh_first: also refactor after the first correction.
+        residual_tolerance: also converged when ``residual_norm(F(x))`` is at most
+            this (only for solves given a ``residual_norm``).
+        max_backtracks: where F(x) is not finite, retreat halfway towards the last
+            iterate with a finite residual, at most this many times in a row (each
+            counts as an iteration; 0: no retreat, the solve fails).
         linear_solver: solver of the Newton systems.
     """
 
@@ -75,13 +83,16 @@ class ModifiedNewton(eqx.Module):
     refresh_every: int = eqx.field(static=True, default=6)
     contraction: float = eqx.field(static=True, default=0.25)
     refresh_first: bool = eqx.field(static=True, default=False)
+    residual_tolerance: float = eqx.field(static=True, default=0.0)
+    max_backtracks: int = eqx.field(static=True, default=0)
     linear_solver: AbstractSaddleSolver = AutoSaddleSolver()
 
     def factor(self, linearize, x, chain_factor=None):
         """Factors of the Newton matrix ``linearize(x)`` (held constant in derivatives)."""
         return jax.lax.stop_gradient(self.linear_solver.init(linearize(x), chain_factor))
 
-    def solve(self, residual, linearize, x0, *, size: int, chain_factor=None) -> NewtonSolution:
+    def solve(self, residual, linearize, x0, *, size: int, chain_factor=None, scale=1.0,
+              residual_norm=None) -> NewtonSolution:
         """Solve residual(x) = 0 from x0.
 
         Args:
@@ -92,30 +103,60 @@ class ModifiedNewton(eqx.Module):
             size: the leading unknowns whose correction decides convergence.
             chain_factor: known factors of the operator's chain block, if constant
                 (the beam mass of a projection).
+            scale: scale of the unknowns for the step tolerance (may be traced).
+            residual_norm: F ↦ scalar, for ``residual_tolerance`` and
+                ``max_backtracks`` (non-finite norm: retreat).
         """
         fac_shape = jax.eval_shape(lambda x: self.factor(linearize, x, chain_factor), x0)
         fac_none = jax.tree.map(lambda a: jnp.zeros(a.shape, a.dtype), fac_shape)
+        guarded = residual_norm is not None
 
         def cond(c):
-            _, _, it, done, _, _ = c
-            return (~done) & (it < self.max_iterations)
+            return (~c["done"]) & (c["it"] < self.max_iterations) & (c["back"] <= self.max_backtracks)
 
         def body(c):
-            x, fac, it, _, err_prev, refresh = c
+            x = c["x"]
+            r = residual(x)
+            out = dict(c, it=c["it"] + 1)
+            if guarded:
+                rn = residual_norm(r)
+                ok = jnp.isfinite(rn)
+                out["rn"] = rn
+            else:
+                ok = jnp.array(True)
             # the matrix is factored inside the loop (first iteration and refreshes), so
             # the factorization is traced and compiled once
-            fac = run_if(refresh, lambda _: self.factor(linearize, x, chain_factor), fac)
-            dx = self.linear_solver.compute(fac, -residual(x))
-            x = x + dx
+            fac = run_if(c["refresh"] & ok, lambda _: self.factor(linearize, x, chain_factor), c["fac"])
+            dx = self.linear_solver.compute(fac, -r)
+            x_new = x + dx
             err = jnp.max(jnp.abs(dx[:size]))
-            done = (err <= self.tolerance) & jnp.all(jnp.isfinite(x))
-            slow = err > self.contraction * err_prev
-            refresh = slow | ((it + 1) % self.refresh_every == 0) | ((it == 0) & self.refresh_first)
-            return x, fac, it + 1, done, err, refresh
+            done = (err <= self.tolerance * scale) & jnp.all(jnp.isfinite(x_new))
+            if guarded and self.residual_tolerance > 0.0:
+                done = done | (ok & (rn <= self.residual_tolerance))
+            # contraction 0: full Newton (0 · ∞ at the first iteration would read as "fast")
+            slow = (err > self.contraction * c["err"]) if self.contraction > 0.0 else jnp.array(True)
+            refresh = slow | ((c["it"] + 1) % self.refresh_every == 0) | ((c["it"] == 0) & self.refresh_first)
+            if guarded and self.max_backtracks:
+                # a non-finite residual at x: retreat halfway towards the last good iterate
+                # (same correction, half the length); the factors stay those of x_good
+                half = 0.5 * c["a"]
+                x_new = jnp.where(ok, x_new, c["x_good"] + half * c["dx"])
+                out.update(x_good=jnp.where(ok, x, c["x_good"]), dx=jnp.where(ok, dx, c["dx"]),
+                           a=jnp.where(ok, 1.0, half), back=jnp.where(ok, 0, c["back"] + 1))
+                done = done & ok
+                refresh = jnp.where(ok, refresh, c["refresh"])
+                err = jnp.where(ok, err, c["err"])
+                fac = jax.tree.map(lambda f, g: jnp.where(ok, f, g), fac, c["fac"])
+            out.update(x=x_new, fac=fac, done=done, err=err, refresh=refresh)
+            return out
 
-        x, _, it, done, _, _ = jax.lax.while_loop(
-            cond, body, (x0, fac_none, jnp.array(0), jnp.array(False), jnp.array(jnp.inf), jnp.array(True)))
-        return NewtonSolution(x, it, done)
+        zero = jnp.zeros((), jnp.int32)
+        init = dict(x=x0, fac=fac_none, it=zero, done=jnp.array(False), err=jnp.array(jnp.inf),
+                    refresh=jnp.array(True), rn=jnp.array(jnp.nan), back=zero)
+        if guarded and self.max_backtracks:
+            init.update(x_good=x0, dx=jnp.zeros_like(x0), a=jnp.array(1.0))
+        c = jax.lax.while_loop(cond, body, init)
+        return NewtonSolution(c["x"], c["it"], c["done"], c["rn"])
 
     def root(self, residual, linearize, x0, *, size: int, implicit: bool = True,
              refinement: int = 4, chain_factor=None) -> NewtonSolution:
@@ -140,4 +181,4 @@ class ModifiedNewton(eqx.Module):
 
         x, (iters, conv) = jax.lax.custom_root(residual, x0, solve, tangent_solve, has_aux=True)
         return NewtonSolution(x, jax.lax.stop_gradient(iters).astype(jnp.int32),
-                              jax.lax.stop_gradient(conv) > 0.5)
+                              jax.lax.stop_gradient(conv) > 0.5, jnp.array(jnp.nan))

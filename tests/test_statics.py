@@ -154,3 +154,31 @@ def test_failure_names_the_load_step():
     with pytest.raises(StaticsError, match=r"load step 1 of 2 \(load factor 0.5\).*residual") as err:
         solve_static(sys_k, state, load_steps=2, max_iterations=2)
     assert err.value.load_step == 0 and err.value.residual > 0
+
+
+def test_cantilever_on_a_user_spring_is_euler_bernoulli():
+    """Statics runs on the same structured Newton matrix as the time integration, force
+    elements included: a clamped cantilever (L = 1 m, EI = 2 N·m²) with a user-written
+    spring (a pure energy, k = 30 N/m) from its tip to the ground and a small tip load
+    P. Linear Euler–Bernoulli: δ = P / (3EI/L³ + k), exact for cubic elements; the
+    load is small (δ/L ~ 1e-4) so the geometric nonlinearity is below 1e-7 relative.
+    Full Newton on the exact matrix converges in a few iterations."""
+    import equinox as eqx
+
+    from ancf_jax.points import BeamPoint, GroundPoint
+    from tests.test_newton_matrix import CubicSpring
+
+    L, ei, k, p = 1.0, 2.0, 30.0, 3.6e-3
+    m = Model(gravity=(0.0, 0.0))
+    m.add_beam("beam", mesh.straight((0, 0), (1, 0), L, 4), Section(2e9, 1e-3, ei / 2e9, 0.1))
+    m.clamp("root", "beam", 0)
+    m.point_force("load", node("beam", -1), (0.0, -p))
+    system, state = m.build()
+    spring = CubicSpring("spring", BeamPoint(0, jnp.asarray(L)), GroundPoint(jnp.array([L, -0.5])),
+                         k, 0.0, 0.5)
+    system = eqx.tree_at(lambda s: s.forces, system, tuple(system.forces) + (spring,))
+    sol = solve_static(system, state, tolerance=1e-12)
+    tip = np.asarray(system.beam_nodes(sol.state.q, 0))[-1]
+    delta = p / (3 * ei / L**3 + k)
+    assert -tip[1] == pytest.approx(delta, rel=1e-6)
+    assert int(np.max(sol.iterations)) <= 4
