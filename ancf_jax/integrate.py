@@ -36,7 +36,7 @@ import jax.numpy as jnp
 
 from .failures import Failure
 from .integrators.base import AbstractIntegrator, Carry, StepInfo
-from .newton import run_if
+from ._control import run_if
 from .joints import SlidingJoint
 from .system import State, System
 
