@@ -249,11 +249,8 @@ class System(eqx.Module):
         """
         elastic, damping = self._beam_forces(q, v, with_elastic=True)
         out = elastic + damping + load_factor * self.gravity_load()
-        if self.forces:
-            out = out - jax.grad(self.force_potential)(q, t)
-            for f in self.forces:
-                out = out + f.dissipative_force(self, q, v)
-            out = out + self.applied_force(q, v, t, load_factor)
+        for f in self.forces:
+            out = out + f.generalized_force(self, q, v, t, load_factor)
         return out
 
     # ------------------------------------------------------------------ constraints
