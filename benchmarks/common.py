@@ -20,10 +20,12 @@ def stamp() -> dict:
     import numpy
 
     import ancf_jax
+    # the installed version, read without importing Exudyn: its native libraries must not
+    # load into a process that compiles JAX programs (tests/exudyn_cases.py says why)
+    from importlib import metadata
     try:
-        import exudyn
-        exu = exudyn.__version__
-    except ImportError:
+        exu = metadata.version("exudyn")
+    except metadata.PackageNotFoundError:
         exu = None
     cpu = platform.processor() or platform.machine()
     try:
@@ -33,7 +35,6 @@ def stamp() -> dict:
                 break
     except OSError:
         pass
-    import os
     return dict(date=datetime.datetime.now().isoformat(timespec="seconds"), machine=cpu,
                 cores=os.cpu_count(), python=platform.python_version(), jax=jax.__version__,
                 jax_backend=jax.default_backend(), diffrax=diffrax.__version__,

@@ -173,3 +173,19 @@ def test_report_gpu_batch_rows_and_target(tmp_path):
     text = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
     line = next(ln for ln in text.splitlines() if ln.startswith("| the same on the lent GPU"))
     assert "not measured" in line and "other ancf_jax settings" in line
+
+
+def test_stamp_and_availability_do_not_import_exudyn():
+    """The version stamp and the availability check read Exudyn's metadata without importing
+    it: its native libraries loaded into a pytest worker crash later XLA compilations there
+    (tests/exudyn_cases.py), and the cross-check asserts the worker stays free of it."""
+    import importlib.util
+    import sys
+
+    from benchmarks import cases
+    if importlib.util.find_spec("exudyn") is None:
+        pytest.skip("exudyn is not installed")
+    was = "exudyn" in sys.modules
+    s = common.stamp()
+    assert s["exudyn"] and cases.exudyn_available() in (True, False)
+    assert was or "exudyn" not in sys.modules
