@@ -59,12 +59,12 @@ from ancf_jax.model import Model, node
 from ancf_jax.section import Section
 from ancf_jax.simulation import time_grid
 
-try:  # optional dependency (the ``bench`` extra)
-    import exudyn as exu
-    from exudyn import itemInterface as eii
-except ImportError:  # pragma: no cover - exercised where exudyn is missing
-    exu = None
-    eii = None
+# Exudyn (optional, the ``bench`` extra) is imported on first use by require_exudyn(),
+# never at import: the ancf_jax side of this module (formulations, twin systems) runs in
+# processes that compile JAX programs, where Exudyn's native libraries must not load
+# (tests/exudyn_cases.py says why)
+exu = None
+eii = None
 
 MODELS = ("M1", "M2", "H1")
 
@@ -86,10 +86,17 @@ H1 = dict(length=1.2, n_elements=8, area=0.0018, second_moment=1.215e-8, density
 
 
 def require_exudyn():
-    """Raise ImportError with a helpful message when Exudyn is not installed."""
+    """Import Exudyn (module globals ``exu``, ``eii``); raise ImportError with a helpful
+    message when it is not installed."""
+    global exu, eii
     if exu is None:
-        raise ImportError("exudyn is not installed (pip install 'ancf_jax[bench]' or "
-                          "pip install exudyn)")
+        try:
+            import exudyn
+            from exudyn import itemInterface
+        except ImportError as err:
+            raise ImportError("exudyn is not installed (pip install 'ancf_jax[bench]' or "
+                              "pip install exudyn)") from err
+        exu, eii = exudyn, itemInterface
 
 
 # ------------------------------------------------------------------ ancf_jax side

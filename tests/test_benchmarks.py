@@ -175,9 +175,10 @@ def test_report_gpu_batch_rows_and_target(tmp_path):
     assert "not measured" in line and "other ancf_jax settings" in line
 
 
-def test_stamp_and_availability_do_not_import_exudyn():
-    """The version stamp and the availability check read Exudyn's metadata without importing
-    it: its native libraries loaded into a pytest worker crash later XLA compilations there
+def test_ancf_side_of_the_benchmarks_does_not_import_exudyn():
+    """The version stamp, the availability check and the ancf_jax twins of the Exudyn
+    models (benchmarks/exudyn_models.py) work without importing Exudyn: its native
+    libraries loaded into a pytest worker crash later XLA compilations there
     (tests/exudyn_cases.py), and the cross-check asserts the worker stays free of it."""
     import importlib.util
     import sys
@@ -188,4 +189,5 @@ def test_stamp_and_availability_do_not_import_exudyn():
     was = "exudyn" in sys.modules
     s = common.stamp()
     assert s["exudyn"] and cases.exudyn_available() in (True, False)
+    assert cases.formulation().axial_strain == "engineering"
     assert was or "exudyn" not in sys.modules
