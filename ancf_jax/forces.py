@@ -8,6 +8,11 @@ element splits into three parts so that the energy balance can be kept:
 * ``dissipative_force(system, q, v)``: a damping part (its power is dissipation);
 * ``applied_force(system, q, v, t)``: prescribed loads (their power is external work).
 
+A user's law subclasses :class:`AbstractForce` and writes all four methods, or one of
+the two partial bases that fix the parts it does not have:
+:class:`AbstractConservativeForce` (a potential only: springs, user energies) and
+:class:`AbstractLoad` (a prescribed load only).
+
 Point forces map to generalized forces through the point's Jacobian by one
 vector-Jacobian product, Q = J_pᵀ F, never a hand-written Jacobian.
 
@@ -21,6 +26,7 @@ the element's few coordinates, not by the size of the system.
 
 from __future__ import annotations
 
+import abc
 from typing import Callable, Optional
 
 import equinox as eqx
@@ -41,31 +47,53 @@ class AbstractForce(eqx.Module):
 
     name: str = eqx.field(static=True)
 
+    @abc.abstractmethod
     def potential(self, system, q, t):
         """Potential energy V [J] of the conservative part."""
-        return jnp.zeros(())
 
+    @abc.abstractmethod
     def dissipative_force(self, system, q, v):
         """Generalized damping force, shape (n,)."""
-        return jnp.zeros_like(q)
 
+    @abc.abstractmethod
     def applied_force(self, system, q, v, t):
         """Generalized prescribed load, shape (n,)."""
-        return jnp.zeros_like(q)
 
+    @abc.abstractmethod
     def coordinates(self, system, q):
         """Indices of q the element depends on and acts on (its generalized force is
-        zero elsewhere), int array of fixed length; None (the default): any
-        coordinate. The Newton matrix couples these coordinates
-        (:func:`force_tangent`); None is exact for any force but couples all
-        coordinates (cost O(n²)): an element acting at points returns its points'
-        :meth:`~ancf_jax.points.AbstractPoint.coordinates`."""
-        return None
+        zero elsewhere), int array of fixed length; or None: any coordinate. The Newton
+        matrix couples these coordinates (:func:`force_tangent`); None is exact for any
+        force but couples all coordinates (cost O(n²)): an element acting at points
+        returns its points' :meth:`~ancf_jax.points.AbstractPoint.coordinates`."""
 
     def generalized_force(self, system, q, v, t, load_factor=1.0):
         """Q(q, v, t) of the element: −∂V/∂q + dissipative + load_factor · applied, shape (n,)."""
         f = -jax.grad(lambda qq: self.potential(system, qq, t))(q)
         return f + self.dissipative_force(system, q, v) + load_factor * self.applied_force(system, q, v, t)
+
+
+
+class AbstractConservativeForce(AbstractForce):
+    """A force element with a potential only (no damping, no prescribed load): write
+    ``potential`` and ``coordinates``."""
+
+    def dissipative_force(self, system, q, v):
+        return jnp.zeros_like(q)
+
+    def applied_force(self, system, q, v, t):
+        return jnp.zeros_like(q)
+
+
+class AbstractLoad(AbstractForce):
+    """A prescribed load only (no potential, no damping): write ``applied_force`` and
+    ``coordinates``."""
+
+    def potential(self, system, q, t):
+        return jnp.zeros(())
+
+    def dissipative_force(self, system, q, v):
+        return jnp.zeros_like(q)
 
 
 def force_tangent(force: AbstractForce, system, q, v, t, damping_coef, load_factor=1.0):
@@ -96,7 +124,7 @@ def force_tangent(force: AbstractForce, system, q, v, t, damping_coef, load_fact
     return p, -jax.jacfwd(local)(jnp.zeros(k, q.dtype))
 
 
-class PointForce(AbstractForce):
+class PointForce(AbstractLoad):
     """A force F·f(t) [N] at a point, fixed in direction (not a follower load).
 
     ``time_function`` (a JAX-traceable t ↦ scalar) scales ``force``; None: constant.
@@ -114,7 +142,7 @@ class PointForce(AbstractForce):
         return self.point.coordinates(system, q)
 
 
-class PointTorque(AbstractForce):
+class PointTorque(AbstractLoad):
     """A torque τ·f(t) [N·m] on rigid body ``body`` (index)."""
 
     body: int = eqx.field(static=True)
@@ -151,6 +179,9 @@ class SpringDamper(AbstractForce):
 
     def potential(self, system, q, t):
         return 0.5 * self.stiffness * (self.length(system, q) - self.rest_length) ** 2
+
+    def applied_force(self, system, q, v, t):
+        return jnp.zeros_like(q)
 
     def dissipative_force(self, system, q, v):
         ell_dot = jax.jvp(lambda qq: self.length(system, qq), (q,), (v,))[1]

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from typing import Callable, ClassVar
 
+import abc
+
 import equinox as eqx
 import jax.numpy as jnp
 
@@ -24,11 +26,15 @@ class AbstractConstraint(eqx.Module):
     """A joint: ``size`` scalar equations Φ(q, t) = 0 with a name for messages."""
 
     name: str = eqx.field(static=True)
-    size: ClassVar[int] = 0
 
+    @property
+    @abc.abstractmethod
+    def size(self) -> int:
+        """Number of scalar equations (a class constant, or a property of the joint)."""
+
+    @abc.abstractmethod
     def residual(self, system, q, t):
         """Φ(q, t), shape (size,)."""
-        raise NotImplementedError
 
     def equation_labels(self) -> tuple[str, ...]:
         """One label per equation, ``name[i]``, for messages and output files."""

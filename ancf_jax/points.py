@@ -8,6 +8,8 @@ length is found inside traced code, so a point can move across nodes.
 
 from __future__ import annotations
 
+import abc
+
 import equinox as eqx
 import jax.numpy as jnp
 
@@ -17,19 +19,19 @@ from .bodies import body_point, rotation
 class AbstractPoint(eqx.Module):
     """A point with a position r(q) [m], shape (2,)."""
 
+    @abc.abstractmethod
     def position(self, system, q):
         """Position r(q) [m] of the point, shape (2,), for the system coordinates q (n,)."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def direction(self, system, q):
         """A material direction attached to the point (body axis or beam slope), shape (2,)."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def coordinates(self, system, q):
         """Indices of q that the position and direction of the point depend on, int
         array of fixed length (the Newton matrix of a force element acting at the
         point couples only these; :meth:`ancf_jax.forces.AbstractForce.coordinates`)."""
-        raise NotImplementedError
 
 
 class GroundPoint(AbstractPoint):

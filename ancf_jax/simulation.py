@@ -40,9 +40,9 @@ from .errors import ModelError, SimulationError
 from .integrate import (DEFAULT_DT, DEFAULT_HALVINGS, LoopState, RunOptions, initial_loop, integrate_fixed,
                         segment_of, sliding_beams)
 from .failures import Failure
-from .integrators.base import AbstractIntegrator, Carry
+from .integrators.base import AbstractAdaptiveSolver, AbstractIntegrator, AbstractSolver, Carry
 from .integrators.diffrax_solvers import KINDS as DIFFRAX_KINDS
-from .integrators.diffrax_solvers import DiffraxSolver, succeeded
+from .integrators.diffrax_solvers import DiffraxSolver
 from .integrators.generalized_alpha import GeneralizedAlpha
 from .integrators.rk4 import RK4
 from .linalg import LINEAR_SOLVERS
@@ -92,15 +92,9 @@ def make_solver(name: str, **options):
     return DiffraxSolver(kind=name, **options)
 
 
-def solver_name(solver) -> str:
+def solver_name(solver: AbstractSolver) -> str:
     """The name of a solver instance (inverse of :func:`make_solver`)."""
-    if isinstance(solver, GeneralizedAlpha):
-        return "generalized-alpha"
-    if isinstance(solver, RK4):
-        return "rk4"
-    if isinstance(solver, DiffraxSolver):
-        return solver.kind
-    return type(solver).__name__
+    return solver.name
 
 
 STEPS_PER_CHUNK = 500
@@ -136,6 +130,9 @@ def _prepare(t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, ma
         solver = make_solver(solver, **(solver_options or {}))
     elif solver_options:
         raise ModelError("solver_options apply to solvers given by name")
+    elif not isinstance(solver, AbstractSolver):
+        raise ModelError(f"solver must be one of {', '.join(SOLVERS)} or an AbstractSolver "
+                         f"instance, got {type(solver).__name__}")
     options = RunOptions(drift_tolerance=drift_tolerance, locate_crossings=locate_crossings,
                          max_halvings=_halvings(max_halvings))
     return solver, options, grid, _chunking(grid[0], grid[1], chunks, batched)
@@ -179,8 +176,8 @@ def trajectory(system: System, state: State, solver, *, t_end: float, dt: float,
     using a value or gradient; a frozen run's gradient is meaningless. Reduce ``dt``
     if it fails.
     """
-    if isinstance(solver, DiffraxSolver):
-        raise ModelError("trajectory() runs fixed-step solvers; use simulate() for diffrax solvers")
+    if not isinstance(solver, AbstractIntegrator):
+        raise ModelError("trajectory() runs fixed-step solvers; use simulate() for adaptive solvers")
     n_int, sub, h, _ = time_grid(t_end, dt, output_dt)
     context = solver.prepare(system)
     loop = initial_loop(system, solver, state, context)
@@ -262,9 +259,9 @@ def simulate(system: System, state: State, *, t_end: float, dt: float | None = N
         t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings, on_failure,
         chunks, solver_options)
     t0 = float(state.t)
-    if isinstance(solver, DiffraxSolver):
-        return _simulate_diffrax(system, state, solver, t0, n_int, out_dt, dt, per_chunk, n_chunks,
-                                 options, on_failure, progress)
+    if isinstance(solver, AbstractAdaptiveSolver):
+        return _simulate_adaptive(system, state, solver, t0, n_int, out_dt, dt, per_chunk, n_chunks,
+                                  options, on_failure, progress)
     return _simulate_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, options,
                            on_failure, progress)
 
@@ -424,7 +421,7 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
     solver, options, (n_int, sub, h, _), (per_chunk, n_chunks) = _prepare(
         t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings, on_failure,
         chunks, solver_options, batched=True)
-    if isinstance(solver, DiffraxSolver):
+    if not isinstance(solver, AbstractIntegrator):
         raise ModelError("simulate_batch runs fixed-step solvers (generalized-alpha, rk4)")
     t0s = {float(s.t) for s in states}
     if len(t0s) != 1:
@@ -448,24 +445,23 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
 
 
 @eqx.filter_jit
-def _diffrax_chunk(system, solver, context, y0, t0, ts, dt0):
-    sol = solver.solve(system, context, y0, t0, ts, dt0)
-    q, v, w = sol.ys
+def _adaptive_chunk(system, solver, context, y0, t0, ts, dt0):
+    (q, v, w), ok, steps = solver.solve(system, context, y0, t0, ts, dt0)
     acc, lam = solver.multipliers(system, context, q, v, ts)
-    return q, v, w, acc, lam, succeeded(sol), sol.stats["num_steps"]
+    return q, v, w, acc, lam, ok, steps
 
 
-def _simulate_diffrax(system, state, solver, t0, n_int, out_dt, dt, per_chunk, n_chunks, options,
+def _simulate_adaptive(system, state, solver, t0, n_int, out_dt, dt, per_chunk, n_chunks, options,
                       on_failure, progress):
     from .integrate import step_status
-    name = solver.kind
+    name = solver.name
     context = jax.jit(solver.prepare)(system) if system.chain_size else None
     y0 = (state.q, state.v, jnp.zeros(3))
     ts_all = t0 + out_dt * np.arange(1, n_int + 1)
     pad = per_chunk * n_chunks - n_int
     ts_all = np.concatenate([ts_all, ts_all[-1] + out_dt * np.arange(1, pad + 1)])
     tc = time.perf_counter()
-    chunk_c, _ = compiled(_diffrax_chunk, system, solver, context, y0, jnp.asarray(t0),
+    chunk_c, _ = compiled(_adaptive_chunk, system, solver, context, y0, jnp.asarray(t0),
                           jnp.asarray(ts_all[:per_chunk]), jnp.asarray(dt))
     status_fn = jax.jit(lambda sys, q, v, lam, t: jax.vmap(
         lambda qq, vv, ll, tt: step_status(sys, None, Carry(tt, qq, vv, qq, qq, ll, jnp.zeros(3), jnp.zeros(3)),

@@ -24,13 +24,13 @@ import numpy as np
 import pytest
 
 from ancf_jax import dae
-from ancf_jax.forces import AbstractForce, PointForce, SpringDamper
+from ancf_jax.forces import AbstractConservativeForce, PointForce, SpringDamper
 from ancf_jax.models.m1 import m1_model
 from ancf_jax.models.m2 import m2_initial
 from ancf_jax.points import BeamPoint, BodyPoint, GroundPoint
 
 
-class CubicSpring(AbstractForce):
+class CubicSpring(AbstractConservativeForce):
     """A hardening spring written as a pure energy: V = ½ k u² + ¼ k₃ u⁴, u = ℓ − ℓ₀."""
 
     a: BeamPoint

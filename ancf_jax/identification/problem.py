@@ -43,7 +43,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ..failures import Failure
-from ..integrators.diffrax_solvers import DiffraxSolver
+from ..integrators.base import AbstractIntegrator
 from ..outputs import COMPONENTS, Output
 from ..simulation import compiled, make_solver, trajectory
 from ..system import State, System
@@ -247,9 +247,9 @@ class Problem:
         self.output = output
         if isinstance(solver, str):
             solver = make_solver(solver, **(solver_options or {}))
-        if isinstance(solver, DiffraxSolver):
+        if not isinstance(solver, AbstractIntegrator):
             raise ModelError(f"identification needs a fixed-step solver (generalized-alpha or rk4), "
-                             f"got {solver.kind}")
+                             f"got {getattr(solver, 'name', type(solver).__name__)}")
         self.solver = solver
         self.dt = check_positive("dt", dt, "s")
         self.t0 = float(state.t)

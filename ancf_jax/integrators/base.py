@@ -1,6 +1,11 @@
-"""Common state and interface of the one-step integrators."""
+"""Common state and interfaces of the solvers: :class:`AbstractSolver`, its fixed-step
+:class:`AbstractIntegrator` (init/step, run by the one time loop of
+:mod:`ancf_jax.integrate`) and :class:`AbstractAdaptiveSolver` (diffrax), and the
+:class:`Carry` of the fixed-step loop."""
 
 from __future__ import annotations
+
+import abc
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -37,35 +42,69 @@ class StepInfo(eqx.Module):
     converged: jnp.ndarray
 
 
-class AbstractIntegrator(eqx.Module):
+class AbstractSolver(eqx.Module):
+    """Anything :func:`~ancf_jax.simulation.simulate` runs: a fixed-step
+    :class:`AbstractIntegrator` or an :class:`AbstractAdaptiveSolver`.
+
+    ``prepare(system)`` returns quantities computed once per run (e.g. the factors of the
+    constant beam mass), passed to every step as ``context``.
+    """
+
+    @property
+    @abc.abstractmethod
+    def name(self) -> str:
+        """The solver's name in scenario files, results and messages."""
+
+    @property
+    @abc.abstractmethod
+    def order(self) -> int:
+        """Order of accuracy of the method."""
+
+    @abc.abstractmethod
+    def prepare(self, system):
+        """Quantities computed once per run (e.g. mass factors), passed to every step."""
+
+
+class AbstractIntegrator(AbstractSolver):
     """A fixed-step one-step method for the constrained equations of motion.
 
     ``init(system, state, context)`` returns the initial :class:`Carry`;
     ``step(system, carry, h, context)`` advances it by h and returns
-    ``(carry, StepInfo)``. ``context`` holds quantities computed once per run
-    (:meth:`prepare`), e.g. the factors of the constant beam mass.
+    ``(carry, StepInfo)``.
     """
 
-    def prepare(self, system):
-        """Quantities computed once per run (e.g. mass factors), passed to every step."""
-        return None
-
+    @abc.abstractmethod
     def forward_only(self) -> "AbstractIntegrator":
         """The same method for runs that are never differentiated (chunked
         :func:`~ancf_jax.simulation.simulate`): an integrator may leave out what only
         derivatives need, which shortens tracing and compilation. Same results."""
-        return self
 
+    @abc.abstractmethod
     def init(self, system, state, context) -> Carry:
         """The initial :class:`Carry` of a run from ``state`` (consistent accelerations
         and multipliers)."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def step(self, system, carry: Carry, h, context):
         """Advance ``carry`` by the step h [s]; returns ``(carry, StepInfo)``."""
-        raise NotImplementedError
 
-    @property
-    def order(self) -> int:
-        """Order of accuracy of the method."""
-        raise NotImplementedError
+
+class AbstractAdaptiveSolver(AbstractSolver):
+    """An adaptive-step solver of the index-1 equations of motion, run between output
+    times by :func:`~ancf_jax.simulation.simulate` (not differentiable by
+    :func:`~ancf_jax.simulation.trajectory`, not batched).
+
+    The state is y = (q, v, work); ``solve`` integrates from t0 and saves at ``ts``,
+    returning ``(ys, ok, steps)``; ``multipliers`` gives accelerations and multipliers
+    at saved states.
+    """
+
+    max_steps: eqx.AbstractVar[int]
+
+    @abc.abstractmethod
+    def solve(self, system, context, y0, t0, ts, dt0):
+        """((q, v, work) at ``ts``, whether the solve succeeded, steps taken)."""
+
+    @abc.abstractmethod
+    def multipliers(self, system, context, q, v, t):
+        """(accelerations, multipliers) at saved states, vmapped over the leading axis."""

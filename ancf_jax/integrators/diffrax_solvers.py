@@ -20,11 +20,12 @@ import optimistix as optx
 
 from .. import dae
 from ..linalg import AbstractSaddleSolver, AutoSaddleSolver
+from .base import AbstractAdaptiveSolver
 
 KINDS = ("tsit5", "dopri5", "kvaerno5")
 
 
-class DiffraxSolver(eqx.Module):
+class DiffraxSolver(AbstractAdaptiveSolver):
     """An adaptive diffrax solver for the index-1 equations of motion.
 
     Attributes:
@@ -42,6 +43,10 @@ class DiffraxSolver(eqx.Module):
     max_steps: int = eqx.field(static=True, default=10_000_000)
     baumgarte: float = eqx.field(static=True, default=50.0)
     linear_solver: AbstractSaddleSolver = AutoSaddleSolver()
+
+    @property
+    def name(self) -> str:
+        return self.kind
 
     @property
     def order(self) -> int:
@@ -66,13 +71,15 @@ class DiffraxSolver(eqx.Module):
         return f
 
     def solve(self, system, context, y0, t0, ts, dt0):
-        """Integrate from t0 and save at ``ts``; returns (diffrax.Solution)."""
+        """Integrate from t0 and save at ``ts``: ((q, v, work) at ``ts``, whether
+        diffrax finished successfully, steps taken)."""
         term = diffrax.ODETerm(self.vector_field(system, context))
-        return diffrax.diffeqsolve(
+        sol = diffrax.diffeqsolve(
             term, self.diffrax_solver(), t0=t0, t1=ts[-1], dt0=dt0, y0=y0,
             saveat=diffrax.SaveAt(ts=ts),
             stepsize_controller=diffrax.PIDController(rtol=self.rtol, atol=self.atol),
             max_steps=self.max_steps, throw=False)
+        return sol.ys, sol.result == diffrax.RESULTS.successful, sol.stats["num_steps"]
 
     def multipliers(self, system, context, q, v, t):
         """Accelerations and multipliers at saved states (vmapped), for the outputs."""
@@ -80,7 +87,3 @@ class DiffraxSolver(eqx.Module):
             system, qq, vv, tt, baumgarte=self.baumgarte, chain_factor=context,
             linear_solver=self.linear_solver))(q, v, t)
 
-
-def succeeded(solution) -> jnp.ndarray:
-    """Whether a diffrax solution finished successfully (boolean array)."""
-    return solution.result == diffrax.RESULTS.successful

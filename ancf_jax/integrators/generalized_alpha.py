@@ -75,6 +75,10 @@ class GeneralizedAlpha(AbstractIntegrator):
     implicit_diff: bool = eqx.field(static=True, default=True)
 
     @property
+    def name(self) -> str:
+        return "generalized-alpha"
+
+    @property
     def order(self) -> int:
         return 2
 

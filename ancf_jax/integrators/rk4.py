@@ -36,11 +36,18 @@ class RK4(AbstractIntegrator):
     linear_solver: AbstractSaddleSolver = AutoSaddleSolver()
 
     @property
+    def name(self) -> str:
+        return "rk4"
+
+    @property
     def order(self) -> int:
         return 4
 
     def prepare(self, system):
         return dae.mass_chain_factor(system)
+
+    def forward_only(self) -> "RK4":
+        return self
 
     def _rates(self, system, q, v, t, chain_factor):
         acc, lam = dae.accelerations(system, q, v, t, baumgarte=self.baumgarte,
