@@ -822,7 +822,10 @@ def build_in_equilibrium(model: Model, *, load_steps: int = 10, pad_to=None,
     from .errors import StaticsError
     from .modal import modal_analysis
     from .statics import solve_static
-    held, guess = model.build(pad_to=pad_to, hold=True)
+    # the held guess is assembled at rest (a given rate would violate the holds)
+    held, guess = model.build(pad_to=pad_to, hold=True, assemble=False)
+    guess = assemble_state(held, State(guess.q, jnp.zeros_like(guess.v), guess.t),
+                           given=np.zeros(held.n_coordinates, bool))
     sol = solve_static(held, guess, load_steps=load_steps, tolerance=tolerance)
     if check_stability:
         w = modal_analysis(held, sol.state.q, sol.multipliers).angular_frequencies
