@@ -662,7 +662,8 @@ def project_velocities(system: System, q, v, t=0.0, *, given=None,
     * a given velocity is kept as far as the joints allow; if it changes by more than
       ``warn_tolerance`` × the largest given velocity magnitude (mixed units: m/s,
       rad/s, 1/s), a :class:`~ancf_jax.errors.VelocityProjectionWarning` names the
-      bodies, beams and sliding joints concerned.
+      bodies, beams and sliding joints concerned (not when every given velocity is
+      zero, e.g. a model at rest whose prescribed motion starts moving it).
 
     Args:
         system: the assembled system.
@@ -726,8 +727,11 @@ def project_velocities(system: System, q, v, t=0.0, *, given=None,
 
     kept = given & active
     change = np.abs(out - v_in) * kept
-    reference = max(np.max(np.abs(v_in) * kept, initial=0.0), np.max(np.abs(out) * kept, initial=0.0))
-    if np.max(change, initial=0.0) > warn_tolerance * reference:
+    largest_given = np.max(np.abs(v_in) * kept, initial=0.0)
+    reference = max(largest_given, np.max(np.abs(out) * kept, initial=0.0))
+    # nothing non-zero given (the default rest): what the joints set (prescribed motion)
+    # is no change of a user's input, so no warning
+    if largest_given > 0.0 and np.max(change, initial=0.0) > warn_tolerance * reference:
         worst: dict[str, float] = {}
         for i in np.flatnonzero(change > warn_tolerance * reference):
             worst[entities[i]] = max(worst.get(entities[i], 0.0), float(change[i]))
