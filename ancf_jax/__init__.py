@@ -13,7 +13,8 @@ import jax as _jax
 _jax.config.update("jax_enable_x64", True)
 
 from ._version import __version__  # noqa: E402
-from .errors import ConstraintError, ModelError, SimulationError, StaticsError  # noqa: E402
+from .errors import (ConstraintError, ModelError, SimulationError, StaticsError,  # noqa: E402
+                     VelocityProjectionWarning)
 
 __all__ = [
     "__version__",
@@ -21,4 +22,5 @@ __all__ = [
     "ConstraintError",
     "StaticsError",
     "SimulationError",
+    "VelocityProjectionWarning",
 ]

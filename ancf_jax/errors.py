@@ -20,6 +20,14 @@ class ConstraintError(ModelError):
     """Redundant or conflicting constraints, detected from the rank of Φ_q at assembly."""
 
 
+class VelocityProjectionWarning(UserWarning):
+    """Initial velocities that were given had to change to satisfy the joints.
+
+    Issued by :func:`ancf_jax.model.project_velocities` (at assembly) with the body,
+    beam or sliding joint whose given velocity changed and by how much.
+    """
+
+
 class StaticsError(RuntimeError):
     """The static Newton solver did not converge.
 

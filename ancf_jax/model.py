@@ -21,6 +21,7 @@ Example (model M1 in a few lines)::
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from typing import Any, Callable, Optional
 
 import jax
@@ -32,7 +33,7 @@ from . import points as P
 from .beam import Beam
 from .bodies import RigidBodies
 from .element.strain_energy import Formulation
-from .errors import ConstraintError, ModelError
+from .errors import ConstraintError, ModelError, VelocityProjectionWarning
 from .forces import PointForce, PointTorque, SpringDamper
 from .mesh import BeamMesh, pad
 from .section import Section
@@ -89,7 +90,8 @@ class _BodySpec:
     mass: float
     inertia: float
     pose: np.ndarray
-    velocity: np.ndarray
+    velocity: np.ndarray  # (3,): ẋ, ẏ, θ̇; 0 where not given
+    given: np.ndarray  # (3,) bool: which of ẋ, ẏ, θ̇ were given
 
 
 class Model:
@@ -148,7 +150,7 @@ class Model:
         return name
 
     def add_body(self, name: str, *, mass, inertia, position=(0.0, 0.0), angle=0.0,
-                 velocity=(0.0, 0.0), angular_velocity=0.0) -> str:
+                 velocity=None, angular_velocity=None) -> str:
         """Add a rigid body (paper Eq. 14: coordinates x, y, θ).
 
         Args:
@@ -157,17 +159,28 @@ class Model:
             inertia: J about the centre [kg·m²] > 0.
             position: centre (x, y) [m].
             angle: θ [rad].
-            velocity: centre velocity [m/s], shape (2,).
-            angular_velocity: θ̇ [rad/s].
+            velocity: centre velocity [m/s], shape (2,); None (default): not given.
+            angular_velocity: θ̇ [rad/s]; None (default): not given.
+
+        A velocity that is not given starts at 0 and is then set by the joints (the
+        body moves with what it is joined to, e.g. the point of a cable it rides on);
+        a given one is kept as far as the joints allow (see :func:`project_velocities`).
         """
         m = check_positive(f"mass of body {name!r}", mass, "kg")
         j = check_positive(f"inertia of body {name!r}", inertia, "kg*m^2")
         pose = np.concatenate([check_vector(f"position of body {name!r}", position, 2),
                                [check_finite(f"angle of body {name!r}", angle).item()]])
-        vel = np.concatenate([check_vector(f"velocity of body {name!r}", velocity, 2),
-                              [check_finite(f"angular_velocity of body {name!r}", angular_velocity).item()]])
+        vel = np.zeros(3)
+        given = np.array([velocity is not None] * 2 + [angular_velocity is not None])
+        if velocity is not None:
+            vel[:2] = check_vector(f"velocity of body {name!r}", velocity, 2)
+        if angular_velocity is not None:
+            w = check_finite(f"angular_velocity of body {name!r}", angular_velocity)
+            if w.shape != ():
+                raise ModelError(f"angular_velocity of body {name!r} must be a number, got {angular_velocity!r}")
+            vel[2] = float(w)
         self._claim(name, "body")
-        self._bodies[name] = _BodySpec(m, j, pose, vel)
+        self._bodies[name] = _BodySpec(m, j, pose, vel, given)
         return name
 
     # ------------------------------------------------------------------ joints
@@ -208,15 +221,23 @@ class Model:
         return name
 
     def slider(self, name: str, body: str, beam: str, s: float, *, local=(0.0, 0.0),
-               hold: bool = False, rate: float = 0.0) -> str:
+               hold: bool = False, rate: float | None = None) -> str:
         """Sliding joint (paper §4): the body point ``local`` stays on beam ``beam`` at
-        the sliding coordinate named ``name``, initially at arc length ``s`` [m] with
-        rate ``rate`` [m/s]. ``hold=True`` adds the constraint ``s = s₀`` (named
-        ``"<name>.hold"``), released by :meth:`System` rebuilds with ``hold=False``.
+        the sliding coordinate named ``name``, initially at arc length ``s`` [m].
+        ``hold=True`` adds the constraint ``s = s₀`` (named ``"<name>.hold"``),
+        released by :meth:`System` rebuilds with ``hold=False``.
+
+        ``rate`` is the initial ṡ [m/s]. Given, it is kept exactly (ṡ has no mass, Eq. 21:
+        the body's and the beam's velocities adjust to it); None (default): ṡ is set by
+        the joints and the given velocities of the body and the beam.
         """
         s0 = check_nonnegative(f"initial arc length s of sliding joint {name!r}", s, "m")
         lp = tuple(check_vector(f"local point of sliding joint {name!r}", local, 2))
-        rate = float(check_finite(f"rate of sliding joint {name!r}", rate))
+        if rate is not None:
+            r = check_finite(f"rate of sliding joint {name!r}", rate)
+            if r.shape != ():
+                raise ModelError(f"rate of sliding joint {name!r} must be a number, got {rate!r}")
+            rate = float(r)
         self._claim(name, "joint")
         self._sliders[name] = dict(body=body, beam=beam, s=s0, local=lp, hold=bool(hold), rate=rate)
         return name
@@ -279,6 +300,19 @@ class Model:
     @property
     def slider_names(self) -> tuple[str, ...]:
         return tuple(self._sliders)
+
+    def given_velocities(self, system: System) -> np.ndarray:
+        """Which initial velocities of ``system`` (built from this model) were given,
+        shape (n,) bool, in the order of q: a body's centre velocity and angular
+        velocity if not None, every beam coordinate (nodal velocities default to
+        "given, at rest"), a sliding coordinate if its joint's ``rate`` is not None."""
+        given = np.ones(system.n_coordinates, bool)
+        for k, name in enumerate(system.body_names):
+            o = system.body_offset(k)
+            given[o:o + 3] = self._bodies[name].given
+        for j, name in enumerate(system.sliding_names):
+            given[system.sliding_offset + j] = self._sliders[name]["rate"] is not None
+        return given
 
     # ------------------------------------------------------------------ build
     def _beam_length(self, name: str) -> float:
@@ -356,12 +390,15 @@ class Model:
             pad_to: pad beams to this many element slots (one int for all beams or a
                 dict beam name → n_max), so systems of different element counts batch.
             hold: override the ``hold`` flag of every sliding joint (None: as added).
-            assemble: project the initial state onto Φ = 0 and Φ̇ = 0.
+            assemble: project the initial state onto Φ = 0 and Φ̇ = 0 (velocities by
+                the kinetic-energy projection of :func:`project_velocities`: given
+                velocities and rates are kept as far as the joints allow).
             tolerance: constraint residual accepted without projection [m].
 
         Raises:
             ModelError: unknown names, points outside a beam, bad indices.
-            ConstraintError: redundant or conflicting joints.
+            ConstraintError: redundant or conflicting joints, or given rates that the
+                joints do not allow (e.g. a held sliding joint given a non-zero rate).
         """
         self._check_references()
         beam_names = list(self._beams)
@@ -421,7 +458,7 @@ class Model:
         bodies = RigidBodies(jnp.asarray([self._bodies[n].mass for n in body_names], float).reshape(-1),
                              jnp.asarray([self._bodies[n].inertia for n in body_names], float).reshape(-1))
         s0 = np.array([self._sliders[n]["s"] for n in slider_names], float)
-        s_rate = np.array([self._sliders[n]["rate"] for n in slider_names], float)
+        s_rate = np.array([self._sliders[n]["rate"] or 0.0 for n in slider_names], float)
 
         skeleton = System(bodies, tuple(beams), (), (), jnp.asarray(self.gravity, float),
                           n_sliding=len(slider_names), body_names=tuple(body_names),
@@ -503,7 +540,8 @@ class Model:
         v0 = np.asarray(system.pack(body_vel, vel0, s_rate))
         state = State(jnp.asarray(q0), jnp.asarray(v0), jnp.zeros(()))
         if assemble:
-            state = assemble_state(system, state, tolerance=tolerance)
+            state = assemble_state(system, state, tolerance=tolerance,
+                                   given=self.given_velocities(system))
         return system, state
 
 
@@ -544,14 +582,187 @@ def check_constraint_rank(system: System, q, t=0.0, *, rtol: float = 1e-9) -> No
             "fewer equations (e.g. clamp mode='direction').")
 
 
-def assemble_state(system: System, state: State, *, tolerance: float = 1e-10,
-                   max_iterations: int = 50) -> State:
-    """Project an initial state onto Φ(q, t) = 0 and Φ̇ = 0 (minimum-norm correction),
-    after checking the rank of Φ_q.
+#: weight of a velocity that was not given, relative to its mass (see project_velocities)
+UNSET_WEIGHT = 1e-9
+
+
+def velocity_weight(mass, given, *, unset_weight: float = UNSET_WEIGHT) -> np.ndarray:
+    """Weight W = D M D of the kinetic-energy projection, shape (n, n): M the system
+    mass matrix (n, n) [kg, kg·m², kg·m per slope], D = 1 on given coordinates
+    (``given`` (n,) bool) and √unset_weight elsewhere (a velocity not given costs
+    ``unset_weight`` times its kinetic energy)."""
+    d = np.where(np.asarray(given, bool), 1.0, np.sqrt(unset_weight))
+    return d[:, None] * np.asarray(mass, float) * d[None, :]
+
+
+def solve_weighted_correction(weight, jac, rhs, *, rtol: float = 1e-12):
+    """Minimize ½ xᵀ W x subject to J x = rhs with one dense KKT system.
+
+    The unknowns are equilibrated first (unit weight on the diagonal; a massless one
+    scaled by its column of J) and the equations normalized, then the KKT matrix
+    [[W, Jᵀ], [J, 0]] is solved by SVD (least squares: dependent consistent rows of J
+    are allowed, their multipliers are not needed).
+
+    Args:
+        weight: W, shape (k, k), symmetric positive semi-definite.
+        jac: J, shape (m, k).
+        rhs: shape (m,).
+        rtol: singular values below rtol × the largest count as zero.
+
+    Returns:
+        (x (k,), undetermined (k,) bool): ``undetermined`` marks the unknowns that the
+        problem leaves free (W singular on the null space of J); all False when the
+        minimizer is unique.
+    """
+    w, jac, rhs = np.asarray(weight, float), np.asarray(jac, float), np.asarray(rhs, float)
+    k, m = w.shape[0], jac.shape[0]
+    diag = np.diag(w).copy()
+    col = np.linalg.norm(jac, axis=0) if m else np.zeros(k)
+    d = np.where(diag > 0, 1.0 / np.sqrt(np.where(diag > 0, diag, 1.0)),
+                 np.where(col > 0, 1.0 / np.where(col > 0, col, 1.0), 1.0))
+    js = jac * d[None, :]
+    row = np.linalg.norm(js, axis=1)
+    r = np.where(row > 0, 1.0 / np.where(row > 0, row, 1.0), 1.0)
+    js = r[:, None] * js
+    kkt = np.block([[d[:, None] * w * d[None, :], js.T], [js, np.zeros((m, m))]])
+    b = np.concatenate([np.zeros(k), r * rhs])
+    u, sv, vt = np.linalg.svd(kkt)
+    keep = sv > rtol * (sv[0] if sv.size else 1.0)
+    sol = vt[keep].T @ ((u[:, keep].T @ b) / sv[keep])
+    null_x = vt[~keep][:, :k]  # null vectors of the KKT matrix, their x parts
+    undetermined = np.any(np.abs(null_x) > 1e-6, axis=0) if null_x.size else np.zeros(k, bool)
+    return d * sol[:k], undetermined
+
+
+def _coordinate_entities(system: System) -> list[str]:
+    """For each coordinate of ``system``, the entity it belongs to (for messages)."""
+    out = [f"body {name!r}" for name in system.body_names for _ in range(3)]
+    for b, name in enumerate(system.beam_names):
+        out += [f"beam {name!r}"] * system.beams[b].n_coordinates
+    out += [f"sliding joint {name!r}" for name in system.sliding_names]
+    return out
+
+
+def project_velocities(system: System, q, v, t=0.0, *, given=None,
+                       warn_tolerance: float = 1e-6, feasibility_tolerance: float = 1e-8,
+                       unset_weight: float = UNSET_WEIGHT) -> np.ndarray:
+    """Kinetic-energy projection of initial velocities onto Φ_q v + Φ_t = 0.
+
+    Minimizes ½ Δvᵀ W Δv subject to Φ_q (v + Δv) = −Φ_t (one dense KKT system, on the
+    host), where W is the system mass matrix (bodies diag(m, m, J), beams their
+    consistent mass) on the coordinates whose velocity was given and ``unset_weight``
+    times it on those not given. Rules:
+
+    * padding coordinates (:meth:`System.inactive_mask`) never change;
+    * a sliding coordinate has no mass (Eq. 21): if its rate was given it is kept
+      exactly, else it is free and set by the joints;
+    * a body velocity not given (it is 0 in ``v``) is set by the joints, e.g. a body
+      on a sliding joint with a given rate and a cable at rest moves with r'(s)·ṡ,
+      and stays 0 where nothing determines it;
+    * a given velocity is kept as far as the joints allow; if it changes by more than
+      ``warn_tolerance`` × the largest given velocity magnitude (mixed units: m/s,
+      rad/s, 1/s), a :class:`~ancf_jax.errors.VelocityProjectionWarning` names the
+      bodies, beams and sliding joints concerned (not when every given velocity is
+      zero, e.g. a model at rest whose prescribed motion starts moving it).
+
+    Args:
+        system: the assembled system.
+        q: positions that satisfy Φ(q, t) = 0, shape (n,).
+        v: initial velocities, shape (n,) (0 where not given).
+        t: time [s].
+        given: which velocities were given, shape (n,) bool (default: all, see
+            :meth:`Model.given_velocities`).
+        warn_tolerance: relative change of a given velocity that is warned about.
+        feasibility_tolerance: relative residual of Φ_q v + Φ_t accepted.
+        unset_weight: weight of a velocity not given, relative to its mass.
+
+    Returns:
+        the projected velocities, shape (n,).
 
     Raises:
-        ConstraintError: redundant joints, or joints that cannot be satisfied together
-            (conflicting), naming those with the largest residuals.
+        ConstraintError: the joints leave velocities undetermined, or the given rates
+            cannot satisfy them (e.g. a held sliding joint given a non-zero rate).
+    """
+    v_in = np.array(v, float)
+    if system.n_constraints == 0:
+        return v_in
+    _, jac_fn, phit_fn = _jitted(system)
+    tq, qq = jnp.asarray(t, float), jnp.asarray(q, float)
+    jac = np.asarray(jac_fn(system, qq, tq))
+    phit = np.asarray(phit_fn(system, qq, tq))
+    n = system.n_coordinates
+    given = np.ones(n, bool) if given is None else np.asarray(given, bool)
+    if given.shape != (n,):
+        raise ModelError(f"given must have shape ({n},), got {given.shape}")
+    active = ~np.asarray(system.inactive_mask())
+    sliding = np.zeros(n, bool)
+    sliding[system.sliding_offset:] = True
+    free = active & ~(sliding & given)  # given rates and padding are kept
+    owners = system.constraint_owner()
+    entities = _coordinate_entities(system)
+
+    weight = velocity_weight(np.asarray(system.mass_matrix()), given, unset_weight=unset_weight)
+    rhs = -(jac @ v_in + phit)
+    dv, undetermined = solve_weighted_correction(weight[np.ix_(free, free)], jac[:, free], rhs)
+    if np.any(undetermined):
+        cols = np.flatnonzero(free)[undetermined]
+        names = sorted({owners[i] for i in range(len(owners)) if np.any(jac[i, cols] != 0)},
+                       key=owners.index)
+        what = sorted({entities[c] for c in cols}, key=entities.index)
+        raise ConstraintError(
+            f"initial velocities are not determined: the KKT system of the velocity "
+            f"projection is singular for {', '.join(what)}; joints involved: "
+            f"{', '.join(names) or 'none'}. Give the rate of the sliding joint or the velocity.")
+    out = v_in.copy()
+    out[free] += dv
+    residual = jac @ out + phit
+    scale = np.max(np.abs(jac), axis=1) * max(np.max(np.abs(out)), np.max(np.abs(v_in))) + np.abs(phit)
+    bad = np.abs(residual) > feasibility_tolerance * np.maximum(scale, 1e-300)
+    if np.any(bad) or not np.all(np.isfinite(out)):
+        names = sorted({owners[i] for i in np.flatnonzero(bad | ~np.isfinite(residual))}, key=owners.index)
+        raise ConstraintError(
+            f"the given initial velocities cannot satisfy the joints (largest residual of "
+            f"Phi_q v + Phi_t {np.max(np.abs(residual)):.3g}); joints involved: "
+            f"{', '.join(names)} (e.g. a held sliding joint given a non-zero rate)")
+
+    kept = given & active
+    change = np.abs(out - v_in) * kept
+    largest_given = np.max(np.abs(v_in) * kept, initial=0.0)
+    reference = max(largest_given, np.max(np.abs(out) * kept, initial=0.0))
+    # nothing non-zero given (the default rest): what the joints set (prescribed motion)
+    # is no change of a user's input, so no warning
+    if largest_given > 0.0 and np.max(change, initial=0.0) > warn_tolerance * reference:
+        worst: dict[str, float] = {}
+        for i in np.flatnonzero(change > warn_tolerance * reference):
+            worst[entities[i]] = max(worst.get(entities[i], 0.0), float(change[i]))
+        listed = ", ".join(f"{e} by {c:.3g}" for e, c in worst.items())
+        warnings.warn(
+            f"the joints changed given initial velocities (kinetic-energy projection): {listed} "
+            f"(largest given {np.max(np.abs(v_in) * kept, initial=0.0):.3g}; m/s, rad/s or 1/s)",
+            VelocityProjectionWarning, stacklevel=3)
+    return out
+
+
+def assemble_state(system: System, state: State, *, tolerance: float = 1e-10,
+                   max_iterations: int = 50, given=None, warn_tolerance: float = 1e-6) -> State:
+    """Project an initial state onto Φ(q, t) = 0 (minimum-norm position correction,
+    after checking the rank of Φ_q) and then its velocities onto Φ̇ = 0 by the
+    kinetic-energy projection of :func:`project_velocities`.
+
+    Args:
+        system: the assembled system.
+        state: the initial state as given.
+        tolerance: constraint residual accepted without position projection [m].
+        max_iterations: Newton iterations of the position projection.
+        given: which velocities were given, shape (n,) bool (default all; see
+            :meth:`Model.given_velocities`).
+        warn_tolerance: relative change of a given velocity that is warned about
+            (:class:`~ancf_jax.errors.VelocityProjectionWarning`).
+
+    Raises:
+        ConstraintError: redundant joints, joints that cannot be satisfied together
+            (conflicting), naming those with the largest residuals, or given rates
+            the joints do not allow.
     """
     phi_fn, jac_fn, phit_fn = _jitted(system)
     t = jnp.asarray(state.t, float)
@@ -579,34 +790,46 @@ def assemble_state(system: System, state: State, *, tolerance: float = 1e-10,
     if not np.all(np.isfinite(phi)) or np.max(np.abs(phi)) > 1e3 * tolerance + 1e-9:
         raise ConstraintError("conflicting constraints: projection did not converge")
     check_constraint_rank(system, q, t)
-    jac = np.asarray(jac_fn(system, jnp.asarray(q), t))
-    v = np.array(state.v, float)
-    rhs = -(jac @ v + np.asarray(phit_fn(system, jnp.asarray(q), t)))
-    v[free] += np.linalg.lstsq(jac[:, free], rhs, rcond=None)[0]
+    v = project_velocities(system, q, state.v, t, given=given, warn_tolerance=warn_tolerance)
     return State(jnp.asarray(q), jnp.asarray(v), state.t)
 
 
 def build_in_equilibrium(model: Model, *, load_steps: int = 10, pad_to=None,
-                         tolerance: float = 1e-9, check_stability: bool = True):
+                         tolerance: float = 1e-9, check_stability: bool = True,
+                         hold: bool | None = False):
     """Static equilibrium with every sliding joint held, then released.
 
     Builds the system with the holds (``hold=True``), solves the statics from the
     model's initial guess, and returns the system without holds together with the
-    equilibrium at rest as its initial state (paper §4.3: the trolley is released at
-    t = 0).
+    equilibrium as its initial state (paper §4.3: the trolley is released at t = 0).
+    The initial velocities are the model's given ones (bodies, beams, sliding rates;
+    by default at rest) projected at the equilibrium positions onto the joints of the
+    returned system (:func:`project_velocities`): a trolley given ``rate`` starts
+    with ṡ = rate.
 
     Newton's method converges to stable and unstable equilibria alike (e.g. a cabin
     standing upside down on its hinge); with ``check_stability`` the tangent stiffness
     of the held equilibrium is checked (constraints eliminated, as in modal analysis)
     and an unstable equilibrium raises a :class:`~ancf_jax.errors.StaticsError`.
 
+    Args:
+        hold: holds of the returned system: False releases every sliding joint, None
+            keeps those added with ``hold=True``.
+
     Returns:
         (released system, initial State, StaticSolution of the held system).
+
+    Raises:
+        ConstraintError: the given velocities or rates cannot satisfy the joints of
+            the returned system (e.g. a held sliding joint given a non-zero rate).
     """
     from .errors import StaticsError
     from .modal import modal_analysis
     from .statics import solve_static
-    held, guess = model.build(pad_to=pad_to, hold=True)
+    # the held guess is assembled at rest (a given rate would violate the holds)
+    held, guess = model.build(pad_to=pad_to, hold=True, assemble=False)
+    guess = assemble_state(held, State(guess.q, jnp.zeros_like(guess.v), guess.t),
+                           given=np.zeros(held.n_coordinates, bool))
     sol = solve_static(held, guess, load_steps=load_steps, tolerance=tolerance)
     if check_stability:
         w = modal_analysis(held, sol.state.q, sol.multipliers).angular_frequencies
@@ -618,6 +841,8 @@ def build_in_equilibrium(model: Model, *, load_steps: int = 10, pad_to=None,
                 f"stiffness, omega^2 = {worst:.3g} 1/s^2, e.g. a hanging body turned upside "
                 "down); start from a better initial guess", load_step=load_steps - 1,
                 load_factor=1.0, residual=float(sol.residuals[-1]), state=sol.state)
-    released, _ = model.build(pad_to=pad_to, hold=False, assemble=False)
-    state = State(sol.state.q, jnp.zeros_like(sol.state.q), jnp.zeros(()))
+    released, given_state = model.build(pad_to=pad_to, hold=hold, assemble=False)
+    v = project_velocities(released, sol.state.q, given_state.v, 0.0,
+                           given=model.given_velocities(released))
+    state = State(sol.state.q, jnp.asarray(v), jnp.zeros(()))
     return released, state, sol

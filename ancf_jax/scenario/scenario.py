@@ -118,16 +118,16 @@ class Scenario:
 
         ``initial.mode = "given"``: the state as written, assembled onto the joints.
         ``"static"``: the static equilibrium under the loads at t = 0 with every sliding
-        joint held at its s₀ (:func:`~ancf_jax.model.build_in_equilibrium`), at rest; the
-        returned system keeps the holds of joints with ``hold = true`` only.
+        joint held at its s₀ (:func:`~ancf_jax.model.build_in_equilibrium`), with the given
+        velocities and rates (default at rest) projected onto the joints of the returned
+        system, which keeps the holds of joints with ``hold = true`` only.
         """
         model = self.model()
         if self.initial_mode == "given":
             return model.build(pad_to=pad_to)
         system, state, _ = build_in_equilibrium(model, load_steps=self.statics.load_steps,
-                                                tolerance=self.statics.tolerance, pad_to=pad_to)
-        if any(j.type == "sliding" and j.hold for j in self.spec.joints.values()):
-            system, _ = model.build(assemble=False, pad_to=pad_to)
+                                                tolerance=self.statics.tolerance, pad_to=pad_to,
+                                                hold=None)
         return system, state
 
     def simulate(self, **overrides) -> Results:

@@ -165,8 +165,11 @@ class BodySpec(Table):
     at: Optional[PointRef] = key(None, doc="instead of position: the centre starts at this point of a "
                                            "beam's initial shape or of a body declared earlier")
     angle: float = key(0.0, unit="rad", allow_inf_nan=False, doc="initial angle θ")
-    velocity: Vec2 = key((0.0, 0.0), unit="m/s", doc="initial velocity of the centre")
-    angular_velocity: float = key(0.0, unit="rad/s", allow_inf_nan=False, doc="initial angular velocity")
+    velocity: Optional[Vec2] = key(None, unit="m/s", doc="initial velocity of the centre (default: not "
+                                                         "given, set by the joints, else 0)")
+    angular_velocity: Optional[float] = key(None, unit="rad/s", allow_inf_nan=False,
+                                            doc="initial angular velocity (default: not given, set by "
+                                                "the joints, else 0)")
     points: dict[str, Vec2] = key({}, unit="m", doc="named points in the body frame, e.g. { hook = [0, 0.5] }")
 
 
@@ -216,7 +219,9 @@ class SlidingSpec(Table):
     beam: str = key(doc="beam name")
     s: float = key(unit="m", ge=0.0, allow_inf_nan=False, doc="initial arc length s₀ along the beam (0..L)")
     local: Vec2 = key((0.0, 0.0), unit="m", doc="the sliding point in the body frame")
-    rate: float = key(0.0, unit="m/s", allow_inf_nan=False, doc="initial ṡ")
+    rate: Optional[float] = key(None, unit="m/s", allow_inf_nan=False,
+                                doc="initial ṡ, kept exactly (default: not given, set by the joints "
+                                    "and the given velocities)")
     hold: bool = key(False, doc="false: held at s₀ only while the static equilibrium is found "
                                 "(initial.mode = static), free from t = 0; true: held for the whole run")
 
@@ -283,7 +288,8 @@ class InitialSpec(Table):
 
     mode: Literal["given", "static"] = key(
         "given", doc="given: as written (assembled onto the joints); static: static equilibrium "
-                     "under the loads at t = 0 with every sliding joint held, at rest")
+                     "under the loads at t = 0 with every sliding joint held, with the given "
+                     "velocities and rates (default at rest) projected onto the joints")
 
 
 class StaticsSpec(Table):
