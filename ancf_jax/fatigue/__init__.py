@@ -13,7 +13,8 @@ Layering: this package belongs to the analysis layer; it imports the element, be
 system and results modules, and nothing below imports it.
 """
 
-from .analysis import METHODS, Concentration, FatigueResult, FatigueSettings, analyse, sinusoid_damage
+from .analysis import (METHODS, Concentration, FatigueResult, FatigueSettings, analyse, settings_from_table,
+                       sinusoid_damage)
 from .damage import life, miner, rainflow_damage
 from .rainflow import cycles, reversals
 from .sn import CORRECTIONS, SNCurve, equivalent_range
@@ -25,4 +26,4 @@ __all__ = ["cycles", "reversals", "SNCurve", "equivalent_range", "CORRECTIONS", 
            "rainflow_damage", "life", "welch", "spectral_moments", "dirlik_coefficients",
            "dirlik_damage", "narrow_band_damage", "rayleigh_damage", "fibre_stress", "points_along",
            "points_at", "stress_history", "analyse", "FatigueSettings", "FatigueResult",
-           "Concentration", "METHODS", "sinusoid_damage"]
+           "Concentration", "METHODS", "sinusoid_damage", "settings_from_table"]

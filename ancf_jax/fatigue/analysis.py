@@ -259,6 +259,22 @@ def analyse(results: Results, settings: FatigueSettings) -> FatigueResult:
                          float(t[-1] - t[0]))
 
 
+def settings_from_table(table) -> FatigueSettings:
+    """:class:`FatigueSettings` of a scenario's validated ``[fatigue]`` table
+    (:class:`ancf_jax.scenario.schema.FatigueSpec`; read by attribute, nothing imported
+    from the scenario layer)."""
+    c = table.sn_curve
+    curve = SNCurve(c.reference_range, c.reference_cycles, c.m1, c.knee_cycles, c.m2, c.cutoff_cycles)
+    at = tuple((p.beam, p.s) for p in table.points.values()) or None
+    conc = tuple(Concentration(k.beam, k.s_min, k.s_max, k.factor) for k in table.concentrations.values())
+    return FatigueSettings(curve, method=table.method, correction=table.mean_stress,
+                           ultimate_strength=table.ultimate_strength, measure=table.measure,
+                           fibre=table.fibre, scf=table.scf, concentrations=conc, layout=table.layout,
+                           points_per_element=table.points_per_element, at=at, t_start=table.t_start,
+                           hours_per_run=table.hours_per_run, passes_per_run=table.passes_per_run,
+                           nperseg=table.nperseg)
+
+
 def sinusoid_damage(amplitude, cycles_count: int, curve: SNCurve, mean=0.0, correction="none",
                     ultimate_strength=None):
     """Closed-form Miner damage n / N(2A) of n cycles of a sinusoid of amplitude A [Pa]
