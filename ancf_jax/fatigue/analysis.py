@@ -104,7 +104,7 @@ class FatigueResult:
         damage_fibres: Miner damage of fibres +c, −c, shape (P, 2).
         stress: surface-fibre stress histories [Pa], shape (N, P, 2).
         t: the output times used [s], shape (N,).
-        duration: t[-1] − t[0] [s].
+        duration: the span of ``t`` (last minus first time) [s].
     """
 
     settings: FatigueSettings

@@ -104,7 +104,8 @@ def stress_history(system: System, beam: int, q, element, xi, fibre=None, measur
         system: the system.
         beam: beam index (static).
         q: coordinates, shape (N, n).
-        element, xi: points, shape (P,) each.
+        element: element index of each point, shape (P,).
+        xi: local coordinate ξ of each point, shape (P,).
         fibre: fibre distance c [m] (default the section's).
         measure: curvature measure (static).
         scf: stress concentration factor K_t, scalar or shape (P,).
