@@ -246,6 +246,8 @@ def test_fibre_stress_is_axial_plus_bending(bent_history):
     # the Hermite cubics reproduce r = (1.001 X, a X²): Green–Lagrange ε = ½(|r'|² − 1)
     a = 0.3 * np.sin(2 * np.pi * 3 * t[37]) + 0.1 * np.sin(2 * np.pi * 7 * t[37])
     assert axial == pytest.approx(200e9 * 0.5 * (1.001**2 + (2 * a * s[3]) ** 2 - 1), rel=1e-9)
+    # the axial-force output N = EA·ε at the same arc length
+    assert float(beam.axial_force(nodes, s[3])) == pytest.approx(axial * float(beam.section.area), rel=1e-12)
     ks, xis, ss = F.points_at(beam, [0.0, 0.25, 0.4])
     assert ks.tolist() == [0, 1, 1] and xis == pytest.approx([0.0, 0.25, 1.0])
 
