@@ -18,7 +18,7 @@ import jax.numpy as jnp
 from .element import mass as element_mass
 from .element.shape_functions import position as _position, slope as _slope
 from .element.strain_energy import Formulation, strain_energy
-from .element.stress import bending_stress
+from .element.stress import axial_force as _axial_force, bending_stress
 from .errors import ModelError
 from .linalg import BlockTridiagonal
 from .mesh import BeamMesh
@@ -206,6 +206,22 @@ class Beam(eqx.Module):
         e_ref = self.mesh.reference_elements[element]
         l = self.mesh.element_lengths[element]
         return bending_stress(e, e_ref, xi * l, l, self.section.youngs_modulus, y, measure)
+
+    @eqx.filter_jit
+    def axial_force(self, nodes, s):
+        """Axial force N = EA·ε [N] at arc length s (tension positive), with the
+        formulation's axial strain measure."""
+        e, x, l, k = self.element_at(nodes, s)
+        e_ref = jnp.concatenate([self.mesh.reference_nodes[k], self.mesh.reference_nodes[k + 1]])
+        return _axial_force(e, e_ref, x, l, self.section.axial_stiffness, self.formulation.axial_strain)
+
+    @eqx.filter_jit
+    def element_axial_force(self, nodes, element, xi):
+        """Axial force N [N] in element ``element`` at local coordinate ξ = x/l ∈ [0, 1]."""
+        e = self.mesh.element_coordinates(nodes)[element]
+        e_ref = self.mesh.reference_elements[element]
+        l = self.mesh.element_lengths[element]
+        return _axial_force(e, e_ref, xi * l, l, self.section.axial_stiffness, self.formulation.axial_strain)
 
     @eqx.filter_jit
     def stress_along(self, nodes, points_per_element=11, y=None, measure="exact"):

@@ -1,6 +1,6 @@
 """Command-line interface ``ancf-jax``.
 
-``ancf-jax run|static|modal|check MODEL [options]`` with MODEL a shipped scenario
+``ancf-jax run|static|modal|check|fatigue MODEL [options]`` with MODEL a shipped scenario
 (m1, m2, …) or a scenario file; see ``ancf-jax COMMAND --help``. Every option and the
 scenario are checked before anything is compiled; a bad option exits with status 2
 and one line naming it; a failed simulation writes what it computed and exits with
@@ -133,6 +133,19 @@ def build_parser() -> argparse.ArgumentParser:
     modal.add_argument("--modes", type=_positive_int, default=6, help="number of modes")
     modal.add_argument("--json", action="store_true", help='print {"frequencies_hz": [...]}')
 
+    fatigue = sub.add_parser("fatigue", help="fatigue damage and life along the beams of a run",
+                             description="Simulate a model with its scenario settings and assess fatigue "
+                                         "with its [fatigue] table (defaults: rainflow, Eurocode 3 detail "
+                                         "160 MPa, Barlow points of every element, both surface fibres); "
+                                         "writes damage.csv (beam,s,damage,life_repeats), fatigue.json and "
+                                         "figures (default directory results/MODEL-fatigue).")
+    common(fatigue, "element count of the (single) beam")
+    fatigue.add_argument("--t-end", type=_positive_float, default=None, help="end time [s]")
+    fatigue.add_argument("--dt", type=_positive_float, default=None, help="time step [s]")
+    fatigue.add_argument("--out", type=Path, default=None, help="output directory (default results/MODEL-fatigue)")
+    fatigue.add_argument("--no-figures", action="store_true", help="skip the figures")
+    fatigue.add_argument("--no-progress", action="store_true", help="no progress bar")
+
     check = sub.add_parser("check", help="validate a scenario without running it")
     check.add_argument("model", metavar="MODEL", help="shipped scenario name or FILE.toml")
     check.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
@@ -227,10 +240,27 @@ def _scenarios(args, default_many=False, extra=()):
                   for n in counts}
 
 
+def _simulate_all(scs, settings, kw) -> dict:
+    """Simulate each scenario of ``scs`` ({label: Scenario}) with ``simulate`` keyword
+    arguments ``kw``; several element counts of a fixed-step solver run as one padded,
+    vmapped batch. Returns {label: Results}."""
+    from .simulation import simulate, simulate_batch
+    labels = list(scs)
+    if len(labels) > 1 and settings.solver in ("generalized-alpha", "rk4"):
+        n_max = max(labels)
+        built = [scs[n].build(pad_to={next(iter(scs[n].beam_elements)): n_max}) for n in labels]
+        results = simulate_batch([b[0] for b in built], [b[1] for b in built], **kw)
+    else:
+        results = []
+        for n in labels:
+            system, state = scs[n].build()
+            results.append(simulate(system, state, **kw))
+    return dict(zip(labels, results))
+
+
 # ---------------------------------------------------------------------------- commands
 def _run(args) -> int:
     from .reports import report_m1, report_m2, report_scenario
-    from .simulation import simulate, simulate_batch
 
     extra = []
     if args.t_end is not None:
@@ -253,17 +283,8 @@ def _run(args) -> int:
     kw["locate_crossings"] = kw["locate_crossings"] or args.locate_crossings
     kw.update(progress=False if args.no_progress else None, on_failure="return")
     out = Path(args.out) if args.out is not None else Path("results") / base.name
-    labels = list(scs)
-    if len(labels) > 1 and settings.solver in ("generalized-alpha", "rk4"):
-        n_max = max(labels)
-        built = [scs[n].build(pad_to={next(iter(scs[n].beam_elements)): n_max}) for n in labels]
-        results = simulate_batch([b[0] for b in built], [b[1] for b in built], **kw)
-    else:
-        results = []
-        for n in labels:
-            system, state = scs[n].build()
-            results.append(simulate(system, state, **kw))
-    runs = dict(zip(labels, results))
+    runs = _simulate_all(scs, settings, kw)
+    labels, results = list(runs), list(runs.values())
     figures = not args.no_figures
     if base.name == "m1" and len(runs) == 1:
         r = results[0]
@@ -288,6 +309,45 @@ def _run(args) -> int:
     for msg in failed:
         print(f"ancf-jax run: {msg} (results up to then are written)", file=sys.stderr)
     return 1 if failed else 0
+
+
+def _fatigue(args) -> int:
+    from .errors import ModelError
+    from .fatigue import analyse, settings_from_table
+    extra = [f"solver.{k}={v!r}" for k, v in (("t_end", args.t_end), ("dt", args.dt)) if v is not None]
+    base, scs = _scenarios(args, extra=extra)
+    sc = next(iter(scs.values()))
+    try:
+        settings = settings_from_table(sc.spec.fatigue)
+    except ModelError as e:
+        raise _UsageError(str(e)) from None
+    if settings.t_start >= sc.solver.t_end:
+        raise _UsageError(f"fatigue.t_start = {settings.t_start:g} s is not before solver.t_end = "
+                          f"{sc.solver.t_end:g} s")
+    kw = sc.solver.simulate_kwargs()
+    kw.update(progress=False if args.no_progress else None, on_failure="return")
+    out = Path(args.out) if args.out is not None else Path("results") / f"{base.name}-fatigue"
+    r = next(iter(_simulate_all(scs, sc.solver, kw).values()))
+    try:
+        res = analyse(r, settings)
+    except ModelError as e:
+        print(f"ancf-jax fatigue: {r.message or e} (nothing written)", file=sys.stderr)
+        return 1
+    data = res.write(out, figures=not args.no_figures)
+    if r.status != "ok":
+        data["status"] = r.status
+        data["message"] = r.message
+        (out / "fatigue.json").write_text(json.dumps(data, indent=2))
+    hs = data["hot_spot"]
+    life = data["life_repeats"]
+    print(f"{base.name}: fatigue by {settings.method} over {res.duration:g} s at {len(res.s)} points: max damage "
+          f"{data['max_damage']:.3g} per run at {hs['beam']} s = {hs['s']:.4g} m ({hs['fibre']}), life "
+          f"{'infinite' if life is None else f'{life:.3g} runs'}; compile {r.compile_time_s:.1f} s, run "
+          f"{r.wall_time_s:.2f} s -> {out}/")
+    if r.status != "ok":
+        print(f"ancf-jax fatigue: {r.message} (damage of the run up to then is written)", file=sys.stderr)
+        return 1
+    return 0
 
 
 def _static_data(sc):
@@ -477,7 +537,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     try:
         return {"run": _run, "static": _static, "modal": _modal, "check": _check, "synth": _synth,
-                "fit": _fit}[args.command](args)
+                "fit": _fit, "fatigue": _fatigue}[args.command](args)
     except _UsageError as e:
         print(f"ancf-jax {args.command}: error: {e}", file=sys.stderr)
         return 2

@@ -60,6 +60,11 @@ def _stress_history(system: System, beam: int, q, s, y, measure: str):
 
 
 @eqx.filter_jit
+def _axial_force_history(system: System, beam: int, q, s):
+    return jax.vmap(lambda qq: system.beams[beam].axial_force(system.beam_nodes(qq, beam), s))(q)
+
+
+@eqx.filter_jit
 def _element_stress_history(system: System, beam: int, q, element, xi, y, measure: str):
     return jax.vmap(lambda qq: system.beams[beam].element_stress(
         system.beam_nodes(qq, beam), element, xi, y, measure))(q)
@@ -196,6 +201,11 @@ class Results:
         """Bending stress history [Pa] at arc length s on fibre y (Eq. 18), shape (N,)."""
         b = self._index(self.system.beam_names, beam, "beam")
         return np.asarray(_stress_history(self.system, b, jnp.asarray(self.q), _f(s), _f(y), measure))
+
+    def axial_force(self, beam: str, s: float) -> np.ndarray:
+        """Axial force history N = EA·ε [N] at arc length s (tension positive), shape (N,)."""
+        b = self._index(self.system.beam_names, beam, "beam")
+        return np.asarray(_axial_force_history(self.system, b, jnp.asarray(self.q), _f(s)))
 
     def element_stress(self, beam: str, element: int, xi: float, y: float | None = None,
                        measure: str = "exact") -> np.ndarray:

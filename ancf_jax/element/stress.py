@@ -1,4 +1,4 @@
-"""Dynamic bending stress from curvature (paper Eqs. 15–18).
+"""Dynamic bending stress from curvature (paper Eqs. 15–18), and the axial force.
 
 M = EI κ (Eq. 15), κ from the exact formula (Eq. 16) or the small-strain approximation
 (Eq. 17), and the fibre stress σ = E·y·κ (Eq. 18).
@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .strain_energy import curvature
+from .strain_energy import axial_strain, curvature
 
 #: Barlow points of the cubic element on [0, 1]: the 2-point Gauss points, where the
 #: bending moment of the cubic interpolation is most accurate (Barlow 1976).
@@ -45,3 +45,21 @@ def bending_moment(e, e_ref, x, length, bending_stiffness, measure="exact"):
     """Bending moment M = EI (κ − κ₀) [N·m] (Eq. 15)."""
     k = curvature(e, x, length, measure) - curvature(e_ref, x, length, measure)
     return bending_stiffness * k
+
+
+def axial_force(e, e_ref, x, length, axial_stiffness, measure="green_lagrange"):
+    """Axial force N = EA·ε [N] at local x [m], tension positive.
+
+    ε is the element's own axial strain measure (:func:`~.strain_energy.axial_strain`,
+    the one in the strain energy of Eq. 8), so N is the force conjugate to the energy
+    the dynamics use.
+
+    Args:
+        e: current element coordinates, shape (8,) [m, -].
+        e_ref: stress-free reference element coordinates, shape (8,) [m, -].
+        x: local reference arc length [m].
+        length: element length l [m].
+        axial_stiffness: EA [N].
+        measure: ``"green_lagrange"`` or ``"engineering"``.
+    """
+    return axial_stiffness * axial_strain(e, e_ref, x, length, measure)

@@ -297,6 +297,24 @@ class Checker:
                     raise Invalid(path + ("index",), f'joint "{o.joint}" has {size} equations',
                                   f"an integer 0 .. {size - 1}")
 
+    def fatigue(self):
+        f = self.spec.fatigue
+        if f.mean_stress != "none" and f.ultimate_strength is None:
+            raise Invalid(("fatigue", "ultimate_strength"), f"mean_stress = {f.mean_stress} needs it",
+                          "a number > 0 [Pa]")
+        for name, c in f.concentrations.items():
+            path = ("fatigue", "concentrations", name)
+            self.beam(path + ("beam",), c.beam)
+            self.arc_length(path + ("s_min",), c.beam, c.s_min)
+            self.arc_length(path + ("s_max",), c.beam, c.s_max)
+            if c.s_max < c.s_min:
+                raise Invalid(path + ("s_max",), f"{c.s_max:g} m is below s_min = {c.s_min:g} m",
+                              f"a number >= {c.s_min:g} [m]")
+        for name, p in f.points.items():
+            path = ("fatigue", "points", name)
+            self.beam(path + ("beam",), p.beam)
+            self.arc_length(path + ("s",), p.beam, p.s)
+
     def run(self):
         self.names()
         self.beams()
@@ -305,6 +323,7 @@ class Checker:
         self.loads()
         self.solver()
         self.outputs()
+        self.fatigue()
 
 
 def check(spec: S.ScenarioSpec) -> Checker:

@@ -58,6 +58,10 @@ TABLES = [
     ('`[outputs.columns.NAME]` with `type = "stress"`', S.StressOutput),
     ('`[outputs.columns.NAME]` with `type = "reaction"`', S.ReactionOutput),
     ('`[outputs.columns.NAME]` with `type = "energy"`', S.EnergyOutput),
+    ("`[fatigue]`", S.FatigueSpec),
+    ("`[fatigue.sn_curve]`", S.SNCurveSpec),
+    ("`[fatigue.concentrations.NAME]`", S.ConcentrationSpec),
+    ("`[fatigue.points.NAME]`", S.FatiguePointSpec),
 ]
 
 

@@ -18,6 +18,9 @@ from typing import Annotated, ClassVar, Literal, Optional, Union
 from pydantic import BaseModel, ConfigDict, Field
 
 from ..element.strain_energy import AXIAL_STRAINS, CURVATURES
+from ..fatigue.analysis import METHODS as FATIGUE_METHODS
+from ..fatigue.sn import CORRECTIONS
+from ..fatigue.stress import LAYOUTS
 from ..outputs import COMPONENTS
 from ..integrate import DEFAULT_DT, RunOptions
 from ..integrators.diffrax_solvers import DiffraxSolver
@@ -480,6 +483,68 @@ class OutputsSpec(Table):
     columns: dict[str, Output] = key({}, doc="named output columns (the CSV header)")
 
 
+# ----------------------------------------------------------------------------- fatigue
+class SNCurveSpec(Table):
+    """S–N curve N(Δσ): slope m1 through (reference_cycles, reference_range), a knee at
+    knee_cycles, slope m2 to the cut-off at cutoff_cycles, no damage below (EN 1993-1-9
+    Fig. 7.1; see `ancf_jax.fatigue.sn`). The defaults are Eurocode 3 detail category
+    160 MPa; `inf` removes the knee (one slope), m2 = inf makes the knee an endurance
+    limit, cutoff_cycles = inf removes the cut-off."""
+
+    reference_range: float = key(160e6, unit="Pa", gt=0.0, allow_inf_nan=False,
+                                 doc="Δσ_C, the range at reference_cycles (the Eurocode detail category)")
+    reference_cycles: float = key(2e6, gt=0.0, allow_inf_nan=False, doc="N_C")
+    m1: float = key(3.0, gt=0.0, allow_inf_nan=False, doc="first slope")
+    knee_cycles: float = key(5e6, gt=0.0, doc="N_D, start of the second slope (inf: one slope)")
+    m2: float = key(5.0, gt=0.0, doc="second slope (inf: endurance limit at the knee)")
+    cutoff_cycles: float = key(1e8, gt=0.0, doc="N_L, no damage below its range (inf: no cut-off)")
+
+
+class ConcentrationSpec(Table):
+    """A stress concentration factor on a stretch of a beam (multiplies `scf`)."""
+
+    beam: str = key(doc="beam name")
+    s_min: float = key(0.0, unit="m", ge=0.0, allow_inf_nan=False, doc="from arc length")
+    s_max: float = key(unit="m", ge=0.0, allow_inf_nan=False, doc="to arc length")
+    factor: float = key(gt=0.0, allow_inf_nan=False, doc="K_t")
+
+
+class FatiguePointSpec(Table):
+    """A chosen point of a beam for the fatigue assessment."""
+
+    beam: str = key(doc="beam name")
+    s: float = key(unit="m", ge=0.0, allow_inf_nan=False, doc="reference arc length")
+
+
+class FatigueSpec(Table):
+    """Fatigue assessment (`ancf-jax fatigue`): surface-fibre stress σ = K_t (N/A ± E c κ)
+    along the beams, rainflow or Dirlik damage against an S–N curve, Miner sum, life."""
+
+    method: Literal[FATIGUE_METHODS] = key("rainflow", doc="rainflow (ASTM E1049-85, half cycles 0.5) or "
+                                                             "dirlik (spectral; stationary records only)")
+    sn_curve: SNCurveSpec = key(SNCurveSpec(), doc="the S–N curve")
+    mean_stress: Literal[CORRECTIONS] = key("none", doc="mean-stress correction (tensile means only)")
+    ultimate_strength: Optional[float] = key(None, unit="Pa", gt=0.0, allow_inf_nan=False,
+                                             doc="σ_u, needed by goodman and gerber")
+    measure: Literal[CURVATURES] = key("exact", doc="curvature measure of the bending stress")
+    fibre: Optional[float] = key(None, unit="m", gt=0.0, allow_inf_nan=False,
+                                 doc="surface fibre distance c (default each section's outer fibre)")
+    scf: float = key(1.0, gt=0.0, allow_inf_nan=False, doc="stress concentration factor K_t everywhere")
+    concentrations: dict[str, ConcentrationSpec] = key({}, doc="further K_t on stretches of beams, by name")
+    layout: Literal[LAYOUTS] = key("barlow", doc="points along every beam: the 2 Barlow points of each "
+                                                 "element, or points_per_element uniform points")
+    points_per_element: int = key(5, ge=2, le=50, doc="points per element of the uniform layout")
+    points: dict[str, FatiguePointSpec] = key({}, doc="chosen points instead of the layout, by name")
+    t_start: float = key(0.0, unit="s", ge=0.0, allow_inf_nan=False,
+                         doc="ignore output rows before this time (a start-up transient)")
+    hours_per_run: Optional[float] = key(None, unit="h", gt=0.0, allow_inf_nan=False,
+                                         doc="hours of service one run represents (life in hours)")
+    passes_per_run: Optional[float] = key(None, gt=0.0, allow_inf_nan=False,
+                                          doc="passes (trips, crossings) one run represents (life in passes)")
+    nperseg: Optional[int] = key(None, ge=16, doc="dirlik: Welch segment length in samples "
+                                                   "(default one periodogram of the record)")
+
+
 # ----------------------------------------------------------------------------- root
 class ScenarioSpec(Table):
     """A whole scenario file."""
@@ -497,3 +562,4 @@ class ScenarioSpec(Table):
     modal: ModalSpec = key(ModalSpec(), doc="modal analysis")
     solver: SolverSpec = key(doc="time integration")
     outputs: OutputsSpec = key(OutputsSpec(), doc="output columns and sampling")
+    fatigue: FatigueSpec = key(FatigueSpec(), doc="fatigue assessment (`ancf-jax fatigue`)")
