@@ -582,19 +582,6 @@ def check_constraint_rank(system: System, q, t=0.0, *, rtol: float = 1e-9) -> No
             "fewer equations (e.g. clamp mode='direction').")
 
 
-#: weight of a velocity that was not given, relative to its mass (see project_velocities)
-UNSET_WEIGHT = 1e-9
-
-
-def velocity_weight(mass, given, *, unset_weight: float = UNSET_WEIGHT) -> np.ndarray:
-    """Weight W = D M D of the kinetic-energy projection, shape (n, n): M the system
-    mass matrix (n, n) [kg, kg·m², kg·m per slope], D = 1 on given coordinates
-    (``given`` (n,) bool) and √unset_weight elsewhere (a velocity not given costs
-    ``unset_weight`` times its kinetic energy)."""
-    d = np.where(np.asarray(given, bool), 1.0, np.sqrt(unset_weight))
-    return d[:, None] * np.asarray(mass, float) * d[None, :]
-
-
 def solve_weighted_correction(weight, jac, rhs, *, rtol: float = 1e-12):
     """Minimize ½ xᵀ W x subject to J x = rhs with one dense KKT system.
 
@@ -644,14 +631,23 @@ def _coordinate_entities(system: System) -> list[str]:
 
 
 def project_velocities(system: System, q, v, t=0.0, *, given=None,
-                       warn_tolerance: float = 1e-6, feasibility_tolerance: float = 1e-8,
-                       unset_weight: float = UNSET_WEIGHT) -> np.ndarray:
+                       warn_tolerance: float = 1e-6, feasibility_tolerance: float = 1e-8) -> np.ndarray:
     """Kinetic-energy projection of initial velocities onto Φ_q v + Φ_t = 0.
 
-    Minimizes ½ Δvᵀ W Δv subject to Φ_q (v + Δv) = −Φ_t (one dense KKT system, on the
-    host), where W is the system mass matrix (bodies diag(m, m, J), beams their
-    consistent mass) on the coordinates whose velocity was given and ``unset_weight``
-    times it on those not given. Rules:
+    With M the system mass matrix (bodies diag(m, m, J), beams their consistent mass),
+    g the coordinates whose velocity was given and u those whose velocity was not, the
+    velocities are found in two stages (dense KKT systems on the host, solved by
+    :func:`solve_weighted_correction`), given velocities taking precedence:
+
+    1. the given velocities change as little as possible in kinetic energy,
+       min ½ Δv_gᵀ M_gg Δv_g, subject to the part of the constraints that the unset
+       velocities cannot meet (the equations projected onto the complement of the
+       range of Φ_q,u);
+    2. the unset velocities then meet the rest with the least kinetic energy,
+       min ½ v_uᵀ M_uu v_u subject to Φ_q,u v_u = −Φ_t − Φ_q,g v_g.
+
+    This is the limit of one weighted projection in which an unset velocity weighs
+    ε → 0 times its mass. Rules:
 
     * padding coordinates (:meth:`System.inactive_mask`) never change;
     * a sliding coordinate has no mass (Eq. 21): if its rate was given it is kept
@@ -674,7 +670,6 @@ def project_velocities(system: System, q, v, t=0.0, *, given=None,
             :meth:`Model.given_velocities`).
         warn_tolerance: relative change of a given velocity that is warned about.
         feasibility_tolerance: relative residual of Φ_q v + Φ_t accepted.
-        unset_weight: weight of a velocity not given, relative to its mass.
 
     Returns:
         the projected velocities, shape (n,).
@@ -701,11 +696,22 @@ def project_velocities(system: System, q, v, t=0.0, *, given=None,
     owners = system.constraint_owner()
     entities = _coordinate_entities(system)
 
-    weight = velocity_weight(np.asarray(system.mass_matrix()), given, unset_weight=unset_weight)
+    mass = np.asarray(system.mass_matrix())
     rhs = -(jac @ v_in + phit)
-    dv, undetermined = solve_weighted_correction(weight[np.ix_(free, free)], jac[:, free], rhs)
+    g, u = free & given, free & ~given
+    jg, ju = jac[:, g], jac[:, u]
+    # stage 1: the equations the unset velocities cannot meet (left null space of Φ_q,u)
+    if u.any():
+        left, sv, _ = np.linalg.svd(ju, full_matrices=True)
+        rank = int(np.sum(sv > 1e-12 * sv[0])) if sv.size and sv[0] > 0 else 0
+        perp = left[:, rank:]
+    else:
+        perp = np.eye(jac.shape[0])
+    dg, _ = solve_weighted_correction(mass[np.ix_(g, g)], perp.T @ jg, perp.T @ rhs)
+    # stage 2: the unset velocities meet the rest with the least kinetic energy
+    du, undetermined = solve_weighted_correction(mass[np.ix_(u, u)], ju, rhs - jg @ dg)
     if np.any(undetermined):
-        cols = np.flatnonzero(free)[undetermined]
+        cols = np.flatnonzero(u)[undetermined]
         names = sorted({owners[i] for i in range(len(owners)) if np.any(jac[i, cols] != 0)},
                        key=owners.index)
         what = sorted({entities[c] for c in cols}, key=entities.index)
@@ -713,6 +719,9 @@ def project_velocities(system: System, q, v, t=0.0, *, given=None,
             f"initial velocities are not determined: the KKT system of the velocity "
             f"projection is singular for {', '.join(what)}; joints involved: "
             f"{', '.join(names) or 'none'}. Give the rate of the sliding joint or the velocity.")
+    dv = np.zeros(n)
+    dv[g], dv[u] = dg, du
+    dv = dv[free]
     out = v_in.copy()
     out[free] += dv
     residual = jac @ out + phit
