@@ -94,6 +94,11 @@ def _int_list(text: str) -> list[int]:
     return sorted(set(values))
 
 
+#: ``modal --about`` values: the scenario format's names (modal.about) and the old
+#: command-line names kept as aliases
+_ABOUT = {"initial": "initial", "equilibrium": "equilibrium", "reference": "initial", "static": "equilibrium"}
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``ancf-jax`` with its subcommands run, static, modal, check."""
     from .simulation import MAX_STEPS, SOLVERS
@@ -141,10 +146,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     modal = sub.add_parser("modal", help="natural frequencies [Hz]")
     common(modal, "element count of the (single) beam")
-    modal.add_argument("--about", choices=("reference", "static"), default="reference",
-                       help="linearize about the reference (initial) configuration or the static "
-                            "equilibrium (with the stress stiffness)")
-    modal.add_argument("--modes", type=_positive_int, default=6, help="number of modes")
+    modal.add_argument("--about", choices=tuple(_ABOUT), default=None,
+                       help="linearize about the initial state or the static equilibrium (with the "
+                            "stress stiffness); reference and static are the old names of initial and "
+                            "equilibrium (default: the scenario's modal.about)")
+    modal.add_argument("--modes", type=_positive_int, default=None,
+                       help="number of lowest modes (default: the scenario's modal.modes)")
     modal.add_argument("--json", action="store_true", help='print {"frequencies_hz": [...]}')
 
     fatigue = sub.add_parser("fatigue", help="fatigue damage and life along the beams of a run",
@@ -481,23 +488,26 @@ def _modal(args) -> int:
     from .modal import degrees_of_freedom, modal_analysis
     _, scs = _scenarios(args)
     sc = next(iter(scs.values()))
-    if args.about == "static":
+    about = _ABOUT[args.about] if args.about is not None else sc.modal_settings.about
+    modes, option = ((args.modes, "argument --modes") if args.modes is not None else
+                     (sc.modal_settings.modes, f"{sc.path}: modal.modes"))
+    if about == "equilibrium":
         system, sol = sc.equilibrium()
         q, lam = sol.state.q, sol.multipliers
     else:
         system, state = sc.model().build()
         q, lam = state.q, None
     dof = degrees_of_freedom(system)
-    if args.modes > dof:
-        raise _UsageError(f"argument --modes: {args.modes} modes asked, {sc.name} has {dof} degrees of "
+    if modes > dof:
+        raise _UsageError(f"{option}: {modes} modes asked, {sc.name} has {dof} degrees of "
                           f"freedom (accepted: an integer 1 .. {dof})")
-    res = modal_analysis(system, q, lam, n_modes=args.modes)
+    res = modal_analysis(system, q, lam, n_modes=modes)
     freqs = [float(f) for f in res.frequencies_hz]
     if args.json:
         print(json.dumps({"frequencies_hz": freqs}))
     else:
         n = ", ".join(f"{b}: {k} elements" for b, k in sc.beam_elements.items())
-        print(f"{sc.name} natural frequencies about the {args.about} configuration ({n}):")
+        print(f"{sc.name} natural frequencies about the {about} {'state' if about == 'initial' else 'configuration'} ({n}):")
         for i, f in enumerate(freqs, 1):
             print(f"  mode {i:2d}: {f:14.6f} Hz")
     return 0

@@ -252,3 +252,25 @@ def test_run_refuses_conflicting_joints_with_one_line(capsys, tmp_path):
     pin = 'joints.pin={type="pin", point={beam="beam", node=0}, location=[0.1, 0.0]}'
     usage_error(["run", "m1", "--set", pin, "--out", str(tmp_path / "o")], capsys, "conflicting")
     assert not (tmp_path / "o").exists()
+
+
+# ------------------------------------------------------------------ 8. modal names, [modal] table
+def test_modal_about_accepts_the_schema_names_and_the_old_aliases(capsys):
+    freqs = {}
+    for about in ("equilibrium", "static", "initial", "reference"):
+        code, out, err = run_cli(["modal", "m1", "--about", about, "--modes", "2", "--json"], capsys)
+        assert code == 0, err
+        freqs[about] = json.loads(out)["frequencies_hz"]
+    assert freqs["equilibrium"] == freqs["static"] and freqs["initial"] == freqs["reference"]
+    assert freqs["equilibrium"] != freqs["initial"]  # the stress stiffness counts
+
+
+def test_modal_honours_the_modal_table(capsys):
+    code, out, _ = run_cli(["modal", "m1", "--set", "modal.modes=3", "--json"], capsys)
+    assert code == 0 and len(json.loads(out)["frequencies_hz"]) == 3
+    usage_error(["modal", "m1", "--set", "modal.modes=500"], capsys, "modal.modes", "1 .. 24")
+
+
+def test_check_help_says_what_set_does(capsys):
+    code, out, _ = run_cli(["check", "--help"], capsys)
+    assert code == 0 and "override a scenario key" in out
