@@ -13,8 +13,8 @@ import jax as _jax
 _jax.config.update("jax_enable_x64", True)
 
 from ._version import __version__  # noqa: E402
-from .errors import (ConstraintError, ModelError, SimulationError, StaticsError,  # noqa: E402
-                     VelocityProjectionWarning)
+from .errors import (ConstraintError, ModelError, SimulationError, SimulationInterrupted,  # noqa: E402
+                     StaticsError, VelocityProjectionWarning)
 
 __all__ = [
     "__version__",
@@ -22,5 +22,6 @@ __all__ = [
     "ConstraintError",
     "StaticsError",
     "SimulationError",
+    "SimulationInterrupted",
     "VelocityProjectionWarning",
 ]

@@ -1,10 +1,18 @@
 """Command-line interface ``ancf-jax``.
 
-``ancf-jax run|static|modal|check|fatigue MODEL [options]`` with MODEL a shipped scenario
-(m1, m2, …) or a scenario file; see ``ancf-jax COMMAND --help``. Every option and the
-scenario are checked before anything is compiled; a bad option exits with status 2
-and one line naming it; a failed simulation writes what it computed and exits with
-status 1.
+``ancf-jax run|static|modal|check|fatigue|synth|fit MODEL [options]`` with MODEL a shipped
+scenario (m1, m2, …) or a scenario file (TOML or JSON); see ``ancf-jax COMMAND --help``.
+
+Exit status:
+
+* 0: done;
+* 1: a simulation failed (or a fit did not converge): what it computed up to then is
+  written, and one line on stderr says when and why;
+* 2: bad input: one line naming the option or scenario key and what it accepts. Every
+  option, the scenario, the output location (``--out``) and the size of the run
+  (``--max-steps``) are checked before anything is compiled;
+* 130: interrupted (Ctrl-C): a run stops at the next chunk boundary and writes what it
+  computed, with status ``interrupted``.
 """
 
 from __future__ import annotations
@@ -12,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -73,8 +82,8 @@ def _window(text: str) -> tuple[float, float]:
 
 
 def _int_list(text: str) -> list[int]:
-    parts = [p for p in text.split(",") if p.strip()]
-    if not parts:
+    parts = text.split(",")
+    if not all(p.strip() for p in parts):
         raise argparse.ArgumentTypeError(f"must be integers >= 1 separated by commas, got {text!r}")
     try:
         values = [int(p) for p in parts]
@@ -85,20 +94,27 @@ def _int_list(text: str) -> list[int]:
     return sorted(set(values))
 
 
+#: ``modal --about`` values: the scenario format's names (modal.about) and the old
+#: command-line names kept as aliases
+_ABOUT = {"initial": "initial", "equilibrium": "equilibrium", "reference": "initial", "static": "equilibrium"}
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of ``ancf-jax`` with its subcommands run, static, modal, check."""
-    from .simulation import SOLVERS
+    from .simulation import MAX_STEPS, SOLVERS
 
     parser = _Parser(prog="ancf-jax",
                      description="Differentiable planar ANCF beams and cables with rigid multibody "
                                  "systems (Seo, Jung & Park), on JAX. MODEL is a shipped scenario "
                                  "(m1, m2, flexible_pendulum, cantilever_tip_load, hanging_chain, "
-                                 "cable_car) or a scenario file (.toml).")
+                                 "cable_car) or a scenario file (.toml or .json). Exit status: 0 done, 1 failed "
+                                 "run (results up to then written), 2 bad input (one line), 130 "
+                                 "interrupted (results up to then written).")
     parser.add_argument("--version", action="version", version=f"ancf-jax {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
     def common(p, elements_help):
-        p.add_argument("model", metavar="MODEL", help="m1, m2, another shipped scenario, or FILE.toml")
+        p.add_argument("model", metavar="MODEL", help="m1, m2, another shipped scenario, FILE.toml or FILE.json")
         p.add_argument("--elements", type=str, default=None, help=elements_help)
         p.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                        help="override a scenario key (dotted path, TOML value); repeatable")
@@ -117,6 +133,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--locate-crossings", action="store_true",
                      help="split fixed steps where a sliding joint crosses a node")
     run.add_argument("--out", type=Path, default=None, help="output directory (default results/MODEL)")
+    run.add_argument("--max-steps", type=_positive_int, default=None,
+                     help=f"run even if it takes more than {MAX_STEPS:.0e} time steps: the most steps "
+                          "accepted (a longer run is refused before compiling)")
     run.add_argument("--animate", action="store_true", help="also write an animation (GIF)")
     run.add_argument("--no-figures", action="store_true", help="skip the figures")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -127,10 +146,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     modal = sub.add_parser("modal", help="natural frequencies [Hz]")
     common(modal, "element count of the (single) beam")
-    modal.add_argument("--about", choices=("reference", "static"), default="reference",
-                       help="linearize about the reference (initial) configuration or the static "
-                            "equilibrium (with the stress stiffness)")
-    modal.add_argument("--modes", type=_positive_int, default=6, help="number of modes")
+    modal.add_argument("--about", choices=tuple(_ABOUT), default=None,
+                       help="linearize about the initial state or the static equilibrium (with the "
+                            "stress stiffness); reference and static are the old names of initial and "
+                            "equilibrium (default: the scenario's modal.about)")
+    modal.add_argument("--modes", type=_positive_int, default=None,
+                       help="number of lowest modes (default: the scenario's modal.modes)")
     modal.add_argument("--json", action="store_true", help='print {"frequencies_hz": [...]}')
 
     fatigue = sub.add_parser("fatigue", help="fatigue damage and life along the beams of a run",
@@ -143,12 +164,20 @@ def build_parser() -> argparse.ArgumentParser:
     fatigue.add_argument("--t-end", type=_positive_float, default=None, help="end time [s]")
     fatigue.add_argument("--dt", type=_positive_float, default=None, help="time step [s]")
     fatigue.add_argument("--out", type=Path, default=None, help="output directory (default results/MODEL-fatigue)")
+    fatigue.add_argument("--max-steps", type=_positive_int, default=None,
+                         help=f"the most time steps accepted (default {MAX_STEPS:.0e})")
     fatigue.add_argument("--no-figures", action="store_true", help="skip the figures")
     fatigue.add_argument("--no-progress", action="store_true", help="no progress bar")
 
-    check = sub.add_parser("check", help="validate a scenario without running it")
-    check.add_argument("model", metavar="MODEL", help="shipped scenario name or FILE.toml")
-    check.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE")
+    check = sub.add_parser("check", help="validate a scenario without running it",
+                           description="Validate a scenario without running it: the file, the joints "
+                                       "(redundant or conflicting, from the rank of the constraint "
+                                       "Jacobian at the initial state) and the time functions on the "
+                                       "output time grid; prints a summary.")
+    check.add_argument("model", metavar="MODEL", help="shipped scenario name, FILE.toml or FILE.json")
+    check.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                       help="override a scenario key before validating it (dotted path, TOML value, "
+                            "e.g. solver.dt=1e-4), as run does; repeatable")
 
     synth = sub.add_parser("synth", help="synthetic measurements t,y of a model output (noisy)",
                            description="Simulate a model with given Rayleigh coefficients and write "
@@ -204,6 +233,56 @@ class _UsageError(Exception):
     """A one-line command-line error (exit status 2)."""
 
 
+def _check_out(path, option: str = "--out", *, file: bool = False) -> Path:
+    """Refuse an output location that cannot be written (an existing file where a
+    directory is wanted, a path under a file, a directory without write permission)
+    before anything is compiled. ``file``: ``path`` is a file to write, not a directory."""
+    path = Path(path)
+    accepted = ("a file path in a writable directory" if file else
+                "a new or existing directory where files can be written")
+
+    def fail(reason):
+        raise _UsageError(f"argument {option}: {reason} (accepted: {accepted})")
+
+    if path.exists():
+        if file and path.is_dir():
+            fail(f"{path} is a directory")
+        if not file and not path.is_dir():
+            fail(f"{path} exists and is not a directory")
+        if not os.access(path, os.W_OK | (0 if file else os.X_OK)):
+            fail(f"{path} is not writable")
+        return path
+    parent = path.absolute().parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        fail(f"{path} is under {parent}, which is not a directory")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        fail(f"cannot create {path}: {parent} is not writable")
+    return path
+
+
+def _check_size(args, scs, settings):
+    """Refuse a runaway run (steps, output size) before anything is built or compiled;
+    the state size is counted from the scenario (4 per node, 3 per body, 1 per sliding
+    joint)."""
+    from .errors import ModelError
+    from .simulation import check_run_size
+    names = dict(t_end="--t-end" if getattr(args, "t_end", None) is not None else "solver.t_end",
+                 dt="--dt" if getattr(args, "dt", None) is not None else "solver.dt",
+                 output_dt=("--output-dt" if getattr(args, "output_dt", None) is not None else "outputs.dt"),
+                 max_steps="--max-steps", max_output_bytes="")
+    for sc in scs.values():
+        n = (sum(4 * (k + 1) for k in sc.beam_elements.values()) + 3 * len(sc.spec.bodies)
+             + sum(j.type == "sliding" for j in sc.spec.joints.values()))
+        try:
+            check_run_size(settings.t_end, settings.dt, settings.output_dt, n, batch=len(scs),
+                           fixed_step=settings.solver in ("generalized-alpha", "rk4"),
+                           max_steps=args.max_steps, names=names)
+        except ModelError as e:
+            raise _UsageError(str(e)) from None
+
+
 def _load(source, overrides):
     from .scenario import ScenarioError, load_scenario
     try:
@@ -245,17 +324,32 @@ def _simulate_all(scs, settings, kw) -> dict:
     arguments ``kw``; several element counts of a fixed-step solver run as one padded,
     vmapped batch. Returns {label: Results}."""
     from .simulation import simulate, simulate_batch
+    from .errors import ModelError
     labels = list(scs)
-    if len(labels) > 1 and settings.solver in ("generalized-alpha", "rk4"):
-        n_max = max(labels)
-        built = [scs[n].build(pad_to={next(iter(scs[n].beam_elements)): n_max}) for n in labels]
-        results = simulate_batch([b[0] for b in built], [b[1] for b in built], **kw)
-    else:
-        results = []
-        for n in labels:
-            system, state = scs[n].build()
-            results.append(simulate(system, state, **kw))
-    return dict(zip(labels, results))
+    try:
+        if len(labels) > 1 and settings.solver in ("generalized-alpha", "rk4"):
+            n_max = max(labels)
+            built = [scs[n].build(pad_to={next(iter(scs[n].beam_elements)): n_max}) for n in labels]
+            return dict(zip(labels, simulate_batch([b[0] for b in built], [b[1] for b in built], **kw)))
+        built = {n: scs[n].build() for n in labels}
+    except ModelError as e:  # e.g. redundant or conflicting joints, found at assembly
+        raise _UsageError(f"{scs[labels[0]].path}: {e}") from None
+    try:
+        return {n: simulate(*built[n], **kw) for n in labels}
+    except ModelError as e:  # refused before compiling (run size)
+        raise _UsageError(str(e)) from None
+
+
+def _problems(command: str, runs: dict) -> int:
+    """Print one line per failed or interrupted run; the exit status (0, 1, or 130
+    when interrupted)."""
+    bad = {k: r for k, r in runs.items() if r.status != "ok"}
+    for k, r in bad.items():
+        print(f"ancf-jax {command}: {'' if k == '' else f'{k} elements: '}{r.message} "
+              f"(results up to then are written)", file=sys.stderr)
+    if any(r.status == "interrupted" for r in bad.values()):
+        return 130
+    return 1 if bad else 0
 
 
 # ---------------------------------------------------------------------------- commands
@@ -275,14 +369,17 @@ def _run(args) -> int:
         if args.rho_inf > 1.0:
             raise _UsageError(f"argument --rho-inf: must be in [0, 1], got {args.rho_inf}")
         extra.append(f"solver.generalized_alpha.rho_inf={args.rho_inf!r}")
+    if args.out is not None:
+        _check_out(args.out)
     base, scs = _scenarios(args, default_many=True, extra=extra)
     settings = base.solver
     if args.rho_inf is not None and settings.solver != "generalized-alpha":
         raise _UsageError("argument --rho-inf: needs --solver generalized-alpha")
     kw = settings.simulate_kwargs()
     kw["locate_crossings"] = kw["locate_crossings"] or args.locate_crossings
-    kw.update(progress=False if args.no_progress else None, on_failure="return")
-    out = Path(args.out) if args.out is not None else Path("results") / base.name
+    kw.update(progress=False if args.no_progress else None, on_failure="return", max_steps=args.max_steps)
+    out = _check_out(Path(args.out) if args.out is not None else Path("results") / base.name)
+    _check_size(args, scs, settings)
     runs = _simulate_all(scs, settings, kw)
     labels, results = list(runs), list(runs.values())
     figures = not args.no_figures
@@ -305,16 +402,15 @@ def _run(args) -> int:
         r = results[0]
         print(f"{base.name}: {len(runs)} run(s), {r.solver}, dt = {r.dt:g} s, t_end = {r.t[-1]:g} s; "
               f"compile {r.compile_time_s:.1f} s, run {sum(x.wall_time_s for x in results):.2f} s -> {out}/")
-    failed = [f"{'' if k == '' else f'{k} elements: '}{r.message}" for k, r in runs.items() if r.status != "ok"]
-    for msg in failed:
-        print(f"ancf-jax run: {msg} (results up to then are written)", file=sys.stderr)
-    return 1 if failed else 0
+    return _problems("run", runs)
 
 
 def _fatigue(args) -> int:
     from .errors import ModelError
     from .fatigue import analyse, settings_from_table
     extra = [f"solver.{k}={v!r}" for k, v in (("t_end", args.t_end), ("dt", args.dt)) if v is not None]
+    if args.out is not None:
+        _check_out(args.out)
     base, scs = _scenarios(args, extra=extra)
     sc = next(iter(scs.values()))
     try:
@@ -325,8 +421,9 @@ def _fatigue(args) -> int:
         raise _UsageError(f"fatigue.t_start = {settings.t_start:g} s is not before solver.t_end = "
                           f"{sc.solver.t_end:g} s")
     kw = sc.solver.simulate_kwargs()
-    kw.update(progress=False if args.no_progress else None, on_failure="return")
-    out = Path(args.out) if args.out is not None else Path("results") / f"{base.name}-fatigue"
+    kw.update(progress=False if args.no_progress else None, on_failure="return", max_steps=args.max_steps)
+    out = _check_out(Path(args.out) if args.out is not None else Path("results") / f"{base.name}-fatigue")
+    _check_size(args, scs, sc.solver)
     r = next(iter(_simulate_all(scs, sc.solver, kw).values()))
     try:
         res = analyse(r, settings)
@@ -346,7 +443,7 @@ def _fatigue(args) -> int:
           f"{r.wall_time_s:.2f} s -> {out}/")
     if r.status != "ok":
         print(f"ancf-jax fatigue: {r.message} (damage of the run up to then is written)", file=sys.stderr)
-        return 1
+        return 130 if r.status == "interrupted" else 1
     return 0
 
 
@@ -388,29 +485,41 @@ def _static(args) -> int:
 
 
 def _modal(args) -> int:
-    from .modal import modal_analysis
+    from .modal import degrees_of_freedom, modal_analysis
     _, scs = _scenarios(args)
     sc = next(iter(scs.values()))
-    if args.about == "static":
+    about = _ABOUT[args.about] if args.about is not None else sc.modal_settings.about
+    modes, option = ((args.modes, "argument --modes") if args.modes is not None else
+                     (sc.modal_settings.modes, f"{sc.path}: modal.modes"))
+    if about == "equilibrium":
         system, sol = sc.equilibrium()
         q, lam = sol.state.q, sol.multipliers
     else:
         system, state = sc.model().build()
         q, lam = state.q, None
-    res = modal_analysis(system, q, lam, n_modes=args.modes)
+    dof = degrees_of_freedom(system)
+    if modes > dof:
+        raise _UsageError(f"{option}: {modes} modes asked, {sc.name} has {dof} degrees of "
+                          f"freedom (accepted: an integer 1 .. {dof})")
+    res = modal_analysis(system, q, lam, n_modes=modes)
     freqs = [float(f) for f in res.frequencies_hz]
     if args.json:
         print(json.dumps({"frequencies_hz": freqs}))
     else:
         n = ", ".join(f"{b}: {k} elements" for b, k in sc.beam_elements.items())
-        print(f"{sc.name} natural frequencies about the {args.about} configuration ({n}):")
+        print(f"{sc.name} natural frequencies about the {about} {'state' if about == 'initial' else 'configuration'} ({n}):")
         for i, f in enumerate(freqs, 1):
             print(f"  mode {i:2d}: {f:14.6f} Hz")
     return 0
 
 
 def _check(args) -> int:
+    from .errors import ModelError
     sc = _load(args.model, args.overrides)
+    try:  # the joints: rank of the constraint Jacobian at the initial state, assembly
+        sc.model().build()
+    except ModelError as e:
+        raise _UsageError(f"{sc.path}: joints: {e}") from None
     print(sc.summary())
     return 0
 
@@ -438,6 +547,7 @@ def _synth(args) -> int:
 
     from .errors import ModelError
     from .identification import synthesize, write_csv
+    _check_out(args.out, file=True)
     problem = _identification_problem(args, ("alpha", "beta"))
     values = {k: v for k, v in (("alpha", args.alpha), ("beta", args.beta)) if v is not None}
     t0 = time.perf_counter()
@@ -474,6 +584,8 @@ def _fit(args) -> int:
     from .errors import ModelError, SimulationError
     from .identification import fit_batch, read_csv
     from .identification.data import DataError
+    if args.out is not None:
+        _check_out(args.out)
     requested = [p.strip() for p in args.params.split(",") if p.strip()]
     if not requested:
         raise _UsageError("argument --params: give at least one parameter")
@@ -493,7 +605,7 @@ def _fit(args) -> int:
         if unknown:
             raise _UsageError(f"argument --init: unknown parameter(s) {', '.join(sorted(unknown))} "
                               f"(parameters: {', '.join(problem.names)})")
-    out = Path(args.out) if args.out is not None else Path("results") / f"{problem.name}-fit"
+    out = _check_out(Path(args.out) if args.out is not None else Path("results") / f"{problem.name}-fit")
     try:
         results = fit_batch(problem, datasets, inits or None, free=free, window=args.window,
                             method=args.method, max_iterations=args.max_iter,
@@ -529,7 +641,8 @@ def _fit(args) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``ancf-jax``: parse ``argv`` (default ``sys.argv[1:]``), run the
-    command and return the exit status (0 ok, 1 failed run, 2 bad input)."""
+    command and return the exit status (0 ok, 1 failed run, 2 bad input, 130
+    interrupted; see the module docstring)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:
@@ -541,6 +654,9 @@ def main(argv: list[str] | None = None) -> int:
     except _UsageError as e:
         print(f"ancf-jax {args.command}: error: {e}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # before or after the time loop (which keeps its results)
+        print(f"ancf-jax {args.command}: interrupted (Ctrl-C) before any result was written", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

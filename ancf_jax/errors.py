@@ -62,3 +62,23 @@ class SimulationError(RuntimeError):
         self.time = time
         self.reason = reason
         self.results = results
+
+
+class SimulationInterrupted(KeyboardInterrupt):
+    """A simulation stopped by the user (Ctrl-C) with ``on_failure="raise"``.
+
+    A ``KeyboardInterrupt`` (so that ``except Exception`` does not swallow Ctrl-C) that
+    carries what was computed: the chunk loop stops at the next chunk boundary.
+
+    Attributes:
+        time: the last simulation time [s] computed.
+        reason: ``"interrupted"`` (:attr:`ancf_jax.failures.Failure.INTERRUPTED`).
+        results: the :class:`~ancf_jax.results.Results` computed up to then (a list of
+            them for :func:`~ancf_jax.simulation.simulate_batch`).
+    """
+
+    def __init__(self, message: str, *, time: float, reason: str = "interrupted", results: Any = None):
+        super().__init__(message)
+        self.time = time
+        self.reason = reason
+        self.results = results

@@ -27,10 +27,14 @@ class Failure(enum.IntEnum):
     ``LEFT_BEAM``             ``left_beam``         a sliding joint off its beam
     ``SLIDING_JUMP``          ``sliding_jump``      a sliding joint jumped in one step
     ``ADAPTIVE``              ``solver``            an adaptive (diffrax) solver failed
+    ``INTERRUPTED``           ``interrupted``       stopped by the user (Ctrl-C) at a
+                                                    chunk boundary
     ========================  ====================  ==================================
 
     ``NAN``, ``NEWTON`` and ``SLIDING_JUMP`` are the failures a smaller step can cure
     (:attr:`retryable`): the fixed-step loop redoes such a step in substeps.
+    ``INTERRUPTED`` never appears in traced code: the host's chunk loop sets it when a
+    ``KeyboardInterrupt`` arrives (the rows computed until then are kept).
     """
 
     OK = 0
@@ -40,6 +44,7 @@ class Failure(enum.IntEnum):
     LEFT_BEAM = 4
     SLIDING_JUMP = 5
     ADAPTIVE = 6
+    INTERRUPTED = 7
 
     @property
     def reason(self) -> str:
@@ -54,7 +59,9 @@ class Failure(enum.IntEnum):
     def explanation(self, **context) -> str:
         """The cause in words. ``context`` fills in the numbers the message names:
         ``drift_tolerance``, ``max_sliding_step`` (:class:`~ancf_jax.integrate.RunOptions`),
-        ``joint`` (which sliding joint left its beam), ``max_steps`` (adaptive solvers)."""
+        ``joint`` (which sliding joint left its beam), ``max_steps`` (adaptive solvers),
+        ``solver`` (the integrator's name, e.g. ``rk4``: a message names the kind of
+        step that failed, and only an implicit solver's mentions its Newton iteration)."""
         return _MESSAGES[self].format(**{**_CONTEXT_DEFAULTS, **context})
 
     def message(self, time: float, **context) -> str:
@@ -78,21 +85,24 @@ _REASONS = {
     Failure.LEFT_BEAM: "left_beam",
     Failure.SLIDING_JUMP: "sliding_jump",
     Failure.ADAPTIVE: "solver",
+    Failure.INTERRUPTED: "interrupted",
 }
 
 _MESSAGES = {
     Failure.OK: "no failure",
-    Failure.NAN: "the state became NaN or infinite (the step may be too large for the solver)",
-    Failure.NEWTON: "the Newton iteration did not converge (reduce dt)",
+    Failure.NAN: ("the state became NaN or infinite in a {solver} step (the step may be too large "
+                  "for it; reduce dt)"),
+    Failure.NEWTON: "the Newton iteration of an implicit {solver} step did not converge (reduce dt)",
     Failure.DRIFT: ("the constraint violation exceeded drift_tolerance = {drift_tolerance:g} "
                     "(reduce dt or tighten the solver tolerances)"),
     Failure.LEFT_BEAM: "{joint} left its beam at an end",
     Failure.SLIDING_JUMP: ("a sliding joint moved more than {max_sliding_step:g} of an element length in "
                            "one step: the Newton iteration found a spurious solution (reduce dt, or raise "
                            "rho_inf towards 1)"),
-    Failure.ADAPTIVE: ("the adaptive solver failed (step size underflow, max_steps = {max_steps} "
+    Failure.ADAPTIVE: ("the adaptive {solver} solver failed (step size underflow, max_steps = {max_steps} "
                        "reached, or NaN)"),
+    Failure.INTERRUPTED: "interrupted (Ctrl-C); the results up to then are kept",
 }
 
 _CONTEXT_DEFAULTS = dict(drift_tolerance=float("nan"), max_sliding_step=float("nan"),
-                         joint="a sliding joint", max_steps="?")
+                         joint="a sliding joint", max_steps="?", solver="time")

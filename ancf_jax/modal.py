@@ -46,6 +46,12 @@ def _tangent(system: System, q, lam, t):
     return jax.jacfwd(force_residual)(q), system.constraint_jacobian(q, t), system.mass_matrix()
 
 
+def degrees_of_freedom(system: System) -> int:
+    """Number of modes of ``system``: its active coordinates less its constraint
+    equations (independent after assembly, :func:`~ancf_jax.model.check_constraint_rank`)."""
+    return int(np.sum(~np.asarray(system.inactive_mask()))) - int(system.n_constraints)
+
+
 def modal_analysis(system: System, q, multipliers=None, *, n_modes: int | None = None,
                    t: float = 0.0) -> ModalResult:
     """Natural frequencies and mode shapes about configuration ``q``.
@@ -56,7 +62,11 @@ def modal_analysis(system: System, q, multipliers=None, *, n_modes: int | None =
         multipliers: Lagrange multipliers at ``q`` (from :func:`~ancf_jax.statics.solve_static`)
             to include the stress and constraint-force stiffness; None about an unloaded
             configuration.
-        n_modes: number of lowest modes to return (default all).
+        n_modes: number of lowest modes to return (default all; at most the number of
+            degrees of freedom, :func:`degrees_of_freedom`).
+
+    Raises:
+        ModelError: ``n_modes`` outside 1 .. the number of degrees of freedom.
     """
     m = system.n_constraints
     lam = jnp.zeros(m) if multipliers is None else jnp.asarray(multipliers, float)
@@ -86,7 +96,7 @@ def modal_analysis(system: System, q, multipliers=None, *, n_modes: int | None =
     modes[keep] = basis @ modes_r
     omega = np.sign(w2) * np.sqrt(np.abs(w2))
     if n_modes is not None:
-        if n_modes < 1:
-            raise ModelError(f"n_modes must be >= 1, got {n_modes}")
+        if not 1 <= n_modes <= w2.size:
+            raise ModelError(f"n_modes must be in 1 .. {w2.size} (the degrees of freedom), got {n_modes}")
         omega, modes = omega[:n_modes], modes[:, :n_modes]
     return ModalResult(omega / (2.0 * np.pi), omega, modes.T)

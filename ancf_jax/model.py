@@ -557,12 +557,25 @@ def _jitted(system):
     return _CONSTRAINT, _JACOBIAN, _TIME_DERIVATIVE
 
 
-def check_constraint_rank(system: System, q, t=0.0, *, rtol: float = 1e-9) -> None:
+#: a combination of dependent constraint equations whose residuals differ by more than
+#: this is conflicting, not redundant [m or rad] (see check_constraint_rank)
+CONFLICT_TOLERANCE = 1e-8
+
+
+def check_constraint_rank(system: System, q, t=0.0, *, rtol: float = 1e-9,
+                          conflict_tolerance: float = CONFLICT_TOLERANCE) -> None:
     """Raise :class:`ConstraintError` if Φ_q(q) is rank deficient, naming the joints
-    whose equations are linearly dependent."""
+    whose equations are linearly dependent.
+
+    Dependent equations are *redundant* when they agree (the left null space of Φ_q is
+    orthogonal to Φ(q): one Newton step can satisfy them all) and *conflicting* when
+    they do not (a combination of residuals larger than ``conflict_tolerance``
+    [m or rad], e.g. a pin 0.1 m from a clamp on the same node): the message says
+    which.
+    """
     if system.n_constraints == 0:
         return
-    _, jac_fn, _ = _jitted(system)
+    phi_fn, jac_fn, _ = _jitted(system)
     jac = np.asarray(jac_fn(system, jnp.asarray(q), jnp.asarray(t, float)))
     u, sv, _ = np.linalg.svd(jac)
     scale = sv[0] if sv.size else 1.0
@@ -572,6 +585,17 @@ def check_constraint_rank(system: System, q, t=0.0, *, rtol: float = 1e-9) -> No
         null = u[:, rank:]  # left null space: combinations of dependent equations
         owners = system.constraint_owner()
         labels = system.constraint_labels()
+        phi = np.asarray(phi_fn(system, jnp.asarray(q), jnp.asarray(t, float)))
+        mismatch = null.T @ phi
+        if not np.all(np.isfinite(mismatch)) or np.max(np.abs(mismatch)) > conflict_tolerance:
+            k = int(np.argmax(np.where(np.isfinite(mismatch), np.abs(mismatch), np.inf)))
+            rows = [i for i in range(m) if abs(null[i, k]) > 1e-6]
+            names = sorted({owners[i] for i in rows}, key=owners.index)
+            raise ConstraintError(
+                f"conflicting constraints: the joints {', '.join(names)} cannot be satisfied together "
+                f"(equations {', '.join(labels[i] for i in rows)} are linearly dependent and disagree by "
+                f"{abs(mismatch[k]):.3g}; rank of Phi_q is {rank} of {m}). Remove one of them or make "
+                "them agree (e.g. put the point where the other joint holds it).")
         involved_eq = [labels[i] for i in range(m) if np.max(np.abs(null[i])) > 1e-6]
         involved = sorted({owners[i] for i in range(m) if np.max(np.abs(null[i])) > 1e-6},
                           key=owners.index)

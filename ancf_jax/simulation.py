@@ -36,7 +36,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .errors import ModelError, SimulationError
+from .errors import ModelError, SimulationError, SimulationInterrupted
 from .integrate import (DEFAULT_DT, DEFAULT_HALVINGS, LoopState, RunOptions, initial_loop, integrate_fixed,
                         segment_of, sliding_beams)
 from .failures import Failure
@@ -98,6 +98,68 @@ def solver_name(solver: AbstractSolver) -> str:
 
 
 STEPS_PER_CHUNK = 500
+
+#: most time steps a run takes unless asked for more (``max_steps=``, ``--max-steps``)
+MAX_STEPS = 50_000_000
+#: most output a run keeps in memory unless asked for more (``max_output_bytes=``) [bytes]
+MAX_OUTPUT_BYTES = 4 * 2**30
+
+
+def run_size(n_intervals: int, substeps: int, n_coordinates: int, n_multipliers: int = 0,
+             batch: int = 1) -> tuple[int, int]:
+    """(time steps of one run, bytes of the output kept in memory) of a run of
+    ``n_intervals`` output intervals of ``substeps`` steps each: every output row holds
+    t, q, v, acc (``n_coordinates`` each), the multipliers, the work (3) and the
+    iteration count, 8 bytes per value, for each of ``batch`` members."""
+    rows = n_intervals + 1
+    return int(n_intervals) * int(substeps), rows * (3 * n_coordinates + n_multipliers + 5) * 8 * batch
+
+
+def check_run_size(t_end: float, dt: float, output_dt: float | None, n_coordinates: int,
+                   n_multipliers: int = 0, *, batch: int = 1, fixed_step: bool = True,
+                   max_steps: int | None = None, max_output_bytes: int | None = None,
+                   names: dict | None = None) -> tuple[int, int]:
+    """Refuse a runaway run before anything is compiled.
+
+    Args:
+        t_end, dt, output_dt: the run's end time, step and output interval [s]
+            (as :func:`time_grid` takes them).
+        n_coordinates, n_multipliers: size of q and of the multipliers of the system.
+        batch: number of batch members (output of each is kept).
+        fixed_step: count steps (adaptive solvers choose theirs: only the output is
+            checked).
+        max_steps: most steps accepted (default :data:`MAX_STEPS`).
+        max_output_bytes: most output accepted [bytes] (default :data:`MAX_OUTPUT_BYTES`).
+        names: how the message names ``t_end``, ``dt``, ``output_dt``, ``max_steps`` and
+            ``max_output_bytes`` (the command line names its options; an empty name: no
+            such knob to mention).
+
+    Returns:
+        (steps, output bytes), see :func:`run_size`.
+
+    Raises:
+        ModelError: one line with the estimate and the knob that allows the run.
+    """
+    nm = {**dict(t_end="t_end", dt="dt", output_dt="output_dt", max_steps="max_steps",
+                 max_output_bytes="max_output_bytes"), **(names or {})}
+    max_steps = MAX_STEPS if max_steps is None else max_steps
+    max_output_bytes = MAX_OUTPUT_BYTES if max_output_bytes is None else max_output_bytes
+    if isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer)) or max_steps < 1:
+        raise ModelError(f"{nm['max_steps']} must be an integer >= 1, got {max_steps!r}")
+    check_positive(nm["max_output_bytes"], max_output_bytes, "bytes")
+    n_int, sub, _, out_dt = time_grid(t_end, dt, output_dt)
+    steps, size = run_size(n_int, sub, n_coordinates, n_multipliers, batch)
+    if fixed_step and steps > max_steps:
+        raise ModelError(f"{nm['t_end']} = {t_end:g} s with {nm['dt']} = {dt:g} s needs about {steps:.3g} "
+                         f"time steps, more than {nm['max_steps']} = {max_steps:.3g}: raise {nm['dt']}, "
+                         f"shorten {nm['t_end']}, or give {nm['max_steps']} to run it anyway")
+    if size > max_output_bytes:
+        raise ModelError(f"{nm['t_end']} = {t_end:g} s with {nm['output_dt']} = {out_dt:g} s keeps about "
+                         f"{size / 2**30:.3g} GiB of output ({n_int + 1:.3g} rows of "
+                         f"{3 * n_coordinates + n_multipliers + 5} values{f' x {batch} runs' if batch > 1 else ''}), "
+                         f"more than {max_output_bytes / 2**30:.3g} GiB: raise {nm['output_dt']} or shorten "
+                         f"{nm['t_end']}" + (f", or give {nm['max_output_bytes']}" if nm["max_output_bytes"] else ""))
+    return steps, size
 
 
 def _chunking(n_intervals: int, substeps: int, chunks: int | None,
@@ -204,12 +266,12 @@ def _joints_that_left(system: System, q, v, t_last: float, t_fail: float) -> tup
 
 
 def _failure_message(status: int, t_fail: float, system: System, options: RunOptions,
-                     last=None, max_steps=None) -> str:
+                     last=None, max_steps=None, solver: str = "time") -> str:
     """The one-line message of a :class:`~ancf_jax.failures.Failure`, with the run's
-    numbers (tolerances, the joint that left its beam)."""
+    numbers (tolerances, the joint that left its beam) and the solver's name."""
     failure = Failure(status)
     context = dict(drift_tolerance=options.drift_tolerance, max_sliding_step=options.max_sliding_step,
-                   max_steps=max_steps)
+                   max_steps=max_steps, solver=solver)
     if failure is Failure.LEFT_BEAM:
         names = _joints_that_left(system, *(last or (None, None, 0.0)), t_fail)
         context["joint"] = (f"the sliding joint {names[0]!r}" if len(names) == 1 else
@@ -228,7 +290,8 @@ def simulate(system: System, state: State, *, t_end: float, dt: float | None = N
              drift_tolerance: float = RunOptions.drift_tolerance,
              locate_crossings: bool = RunOptions.locate_crossings,
              max_halvings: int = DEFAULT_HALVINGS, on_failure: str = "raise", progress: bool | None = None,
-             chunks: int | None = None, solver_options: dict | None = None) -> Results:
+             chunks: int | None = None, solver_options: dict | None = None, max_steps: int | None = None,
+             max_output_bytes: int | None = None) -> Results:
     """Simulate ``system`` from ``state`` until ``t_end``.
 
     Args:
@@ -248,16 +311,31 @@ def simulate(system: System, state: State, *, t_end: float, dt: float | None = N
             granularity; default: chunks of about 500 steps, one compiled program for
             runs of any length).
         solver_options: options for a solver given by name.
+        max_steps: most time steps accepted (default :data:`MAX_STEPS`, 5e7): a longer
+            run is refused before anything is compiled (:func:`check_run_size`).
+        max_output_bytes: most output kept in memory [bytes] (default
+            :data:`MAX_OUTPUT_BYTES`, 4 GiB).
+
+    A ``KeyboardInterrupt`` (Ctrl-C) during the run stops it at the next chunk
+    boundary: the results up to then get ``status = "interrupted"`` and are returned
+    (``on_failure="return"``) or raised in a
+    :class:`~ancf_jax.errors.SimulationInterrupted` (a ``KeyboardInterrupt``).
 
     Raises:
-        ModelError: bad arguments (before anything is compiled).
+        ModelError: bad arguments, or a run above ``max_steps`` or ``max_output_bytes``
+            (before anything is compiled).
         SimulationError: the run failed (NaN, Newton failure, constraint drift, a
             sliding joint leaving its beam); ``err.results`` holds the results so far.
+        SimulationInterrupted: Ctrl-C with ``on_failure="raise"``; ``err.results``
+            holds the results so far.
     """
     dt = DEFAULT_DT if dt is None else dt
     solver, options, (n_int, sub, h, out_dt), (per_chunk, n_chunks) = _prepare(
         t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings, on_failure,
         chunks, solver_options)
+    check_run_size(t_end, dt, output_dt, int(np.size(state.q)), int(system.n_constraints),
+                   fixed_step=not isinstance(solver, AbstractAdaptiveSolver), max_steps=max_steps,
+                   max_output_bytes=max_output_bytes)
     t0 = float(state.t)
     if isinstance(solver, AbstractAdaptiveSolver):
         return _simulate_adaptive(system, state, solver, t0, n_int, out_dt, dt, per_chunk, n_chunks,
@@ -319,7 +397,9 @@ def _rows_until_failure(t_rows: np.ndarray, n_rows: int) -> int:
 def _run_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, options, progress,
                batch: int | None):
     """Compile and run the chunked fixed-step loop; ``batch`` members share one vmapped
-    program. Returns (segments, final loop, compile time, wall time, chunks run)."""
+    program. Returns (segments, final loop, compile time, wall time, whether Ctrl-C
+    stopped it). A ``KeyboardInterrupt`` while the chunks run stops the loop: the
+    chunks finished until then are kept."""
     init_fn, chunk_fn = (_init_single, _chunk_single) if batch is None else (_init_batch, _chunk_batch)
     solver = solver.forward_only()  # the chunked loop is never differentiated
     t_end = t0 + n_int * sub * h
@@ -334,22 +414,27 @@ def _run_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, op
     first = segment_of(loop) if batch is None else eqx.filter_vmap(segment_of)(loop)
     segs = [first]
     bar = _progress(t_end - t0, progress, solver_name(solver) + ("" if batch is None else f" ×{batch}"))
-    ran = 0
-    for c in range(n_chunks):
-        loop, seg = chunk_c(system, loop, ctx, solver, h, t_stop, per_chunk, sub, options)
-        jax.block_until_ready(seg.q)
-        segs.append(seg)
-        ran += 1
-        bar.update(min(per_chunk, n_int - c * per_chunk) * (t_end - t0) / n_int)
-        if np.all(np.asarray(loop.status) != Failure.OK):
-            break
-    bar.close()
-    return segs, loop, compile_s, time.perf_counter() - tw, ran
+    interrupted = False
+    try:
+        for c in range(n_chunks):
+            new, seg = chunk_c(system, loop, ctx, solver, h, t_stop, per_chunk, sub, options)
+            jax.block_until_ready(seg.q)
+            segs.append(seg)
+            loop = new
+            bar.update(min(per_chunk, n_int - c * per_chunk) * (t_end - t0) / n_int)
+            if np.all(np.asarray(loop.status) != Failure.OK):
+                break
+    except KeyboardInterrupt:
+        interrupted = True
+    finally:
+        bar.close()
+    return segs, loop, compile_s, time.perf_counter() - tw, interrupted
 
 
 def _results_fixed(system, segs, loop, solver, n_int, sub, h, t0, compile_s, wall, options,
-                   index=None) -> Results:
-    """Results of one (batch member of a) fixed-step run."""
+                   index=None, interrupted=False) -> Results:
+    """Results of one (batch member of a) fixed-step run (``interrupted``: Ctrl-C
+    stopped the chunk loop; rows missing at the end make the status INTERRUPTED)."""
     take = (lambda a: np.asarray(a)) if index is None else (lambda a: np.asarray(a)[index])
     axis = 0 if index is None else 1
     cat = {k: np.concatenate([np.asarray(getattr(s, k)) if index is None else
@@ -358,13 +443,16 @@ def _results_fixed(system, segs, loop, solver, n_int, sub, h, t0, compile_s, wal
     del axis
     status = int(take(loop.status))
     t_fail = float(take(loop.fail_time)) if status != Failure.OK else None
-    n_rows = 1 + n_int
+    n_rows = min(1 + n_int, len(cat["t"]))
     if status != Failure.OK:
         n_rows = _rows_until_failure(cat["t"], n_rows)
     cat = {k: v[:n_rows] for k, v in cat.items()}
     cat["t"] = t0 + h * sub * np.arange(n_rows)  # exact grid (the carry accumulates h)
+    if status == Failure.OK and interrupted and n_rows < 1 + n_int:
+        status, t_fail = Failure.INTERRUPTED, float(cat["t"][-1])
     message = "" if status == Failure.OK else _failure_message(
-        status, t_fail, system, options, last=(cat["q"][-1], cat["v"][-1], float(cat["t"][-1])))
+        status, t_fail, system, options, last=(cat["q"][-1], cat["v"][-1], float(cat["t"][-1])),
+        solver=solver_name(solver))
     return Results(system=system, solver=solver_name(solver), dt=float(h), wall_time_s=wall,
                    compile_time_s=compile_s, status=Failure(status).reason, failure_time=t_fail,
                    message=message, info=dict(steps=int((n_rows - 1) * sub), substeps_per_output=sub),
@@ -373,9 +461,12 @@ def _results_fixed(system, segs, loop, solver, n_int, sub, h, t0, compile_s, wal
 
 def _simulate_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, options,
                     on_failure, progress):
-    segs, loop, compile_s, wall, _ = _run_fixed(system, state, solver, t0, n_int, sub, h, per_chunk,
-                                                n_chunks, options, progress, None)
-    res = _results_fixed(system, segs, loop, solver, n_int, sub, h, t0, compile_s, wall, options)
+    segs, loop, compile_s, wall, interrupted = _run_fixed(system, state, solver, t0, n_int, sub, h,
+                                                          per_chunk, n_chunks, options, progress, None)
+    res = _results_fixed(system, segs, loop, solver, n_int, sub, h, t0, compile_s, wall, options,
+                         interrupted=interrupted)
+    if res.status == Failure.INTERRUPTED.reason and on_failure == "raise":
+        raise SimulationInterrupted(res.message, time=res.failure_time, results=res)
     if res.status != "ok" and on_failure == "raise":
         raise SimulationError(res.message, time=res.failure_time, reason=res.status, results=res)
     return res
@@ -397,18 +488,22 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
                    locate_crossings: bool = RunOptions.locate_crossings,
                    max_halvings: int = DEFAULT_HALVINGS, on_failure: str = "raise",
                    progress: bool | None = None,
-                   chunks: int | None = None, solver_options: dict | None = None) -> list[Results]:
+                   chunks: int | None = None, solver_options: dict | None = None,
+                   max_steps: int | None = None, max_output_bytes: int | None = None) -> list[Results]:
     """Simulate several systems of identical structure in ONE jitted, vmapped program.
 
     Systems differ only in array data: parameter values (α, masses, s₀, …) or meshes of
     different element counts padded to a common size (``Model.build(pad_to=...)``).
     Compilation is shared (reported in every result); the wall time of the batch is
     reported per result as the batch total divided by the batch size, and in
-    ``info["batch_wall_time_s"]``. Arguments as for :func:`simulate` (fixed-step solvers).
+    ``info["batch_wall_time_s"]``. Arguments as for :func:`simulate` (fixed-step solvers;
+    ``max_output_bytes`` counts the output of all members).
 
     Raises:
         SimulationError: a member failed and ``on_failure="raise"``; ``err.results`` is
             the list of all members' results.
+        SimulationInterrupted: Ctrl-C with ``on_failure="raise"``; ``err.results`` is the
+            list of all members' results up to then.
     """
     systems, states = list(systems), list(states)
     if not systems or len(systems) != len(states):
@@ -427,16 +522,21 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
     if len(t0s) != 1:
         raise ModelError("simulate_batch needs a common start time")
     t0 = t0s.pop()
+    check_run_size(t_end, dt, output_dt, int(np.size(states[0].q)), int(systems[0].n_constraints),
+                   batch=len(systems), max_steps=max_steps, max_output_bytes=max_output_bytes)
     bs, bst = stack(systems), stack(states)
-    segs, loop, compile_s, wall, _ = _run_fixed(bs, bst, solver, t0, n_int, sub, h, per_chunk,
-                                                n_chunks, options, progress, len(systems))
+    segs, loop, compile_s, wall, interrupted = _run_fixed(bs, bst, solver, t0, n_int, sub, h, per_chunk,
+                                                          n_chunks, options, progress, len(systems))
     out = []
     for i, sys_i in enumerate(systems):
         r = _results_fixed(sys_i, segs, loop, solver, n_int, sub, h, t0, compile_s,
-                           wall / len(systems), options, index=i)
+                           wall / len(systems), options, index=i, interrupted=interrupted)
         r.info["batch_wall_time_s"] = wall
         r.info["batch_size"] = len(systems)
         out.append(r)
+    stopped = [r for r in out if r.status == Failure.INTERRUPTED.reason]
+    if on_failure == "raise" and stopped:
+        raise SimulationInterrupted(stopped[0].message, time=stopped[0].failure_time, results=out)
     if on_failure == "raise" and any(r.status != "ok" for r in out):
         bad = [f"member {i}: {r.message}" for i, r in enumerate(out) if r.status != "ok"]
         first = next(r for r in out if r.status != "ok")
@@ -477,38 +577,47 @@ def _simulate_adaptive(system, state, solver, t0, n_int, out_dt, dt, per_chunk, 
     bar = _progress(n_int * out_dt, progress, name)
     status, t_fail, steps = Failure.OK, None, 0
     y, t_start = y0, t0
-    for c in range(n_chunks):
-        ts = ts_all[c * per_chunk:(c + 1) * per_chunk]
-        q, v, w, acc, lam, ok, nsteps = chunk_c(system, solver, context, y, jnp.asarray(t_start),
-                                                jnp.asarray(ts), jnp.asarray(dt))
-        steps += int(nsteps)
-        codes = np.asarray(status_fn(system, q, v, lam, jnp.asarray(ts)))
-        if not bool(ok):
-            bad = ~np.all(np.isfinite(np.asarray(q)), axis=1)
-            codes = np.where(bad & (codes == Failure.OK), Failure.ADAPTIVE, codes)
-            if np.all(codes == Failure.OK):
-                codes[-1] = Failure.ADAPTIVE
-        keep = len(ts) if np.all(codes == Failure.OK) else int(np.argmax(codes != Failure.OK))
-        for k, arr in zip(("t", "q", "v", "acc", "lam", "work"), (ts, q, v, acc, lam, w)):
-            rows[k].append(np.asarray(arr)[:keep])
-        rows["iterations"].append(np.zeros(keep, int))
-        bar.update(len(ts) * out_dt)
-        if keep < len(ts):
-            status = int(codes[keep])
-            t_fail = float(ts[keep])
-            break
-        y, t_start = (q[-1], v[-1], w[-1]), float(ts[-1])
-    bar.close()
+    try:
+        for c in range(n_chunks):
+            ts = ts_all[c * per_chunk:(c + 1) * per_chunk]
+            q, v, w, acc, lam, ok, nsteps = chunk_c(system, solver, context, y, jnp.asarray(t_start),
+                                                    jnp.asarray(ts), jnp.asarray(dt))
+            codes = np.asarray(status_fn(system, q, v, lam, jnp.asarray(ts)))
+            if not bool(ok):
+                bad = ~np.all(np.isfinite(np.asarray(q)), axis=1)
+                codes = np.where(bad & (codes == Failure.OK), Failure.ADAPTIVE, codes)
+                if np.all(codes == Failure.OK):
+                    codes[-1] = Failure.ADAPTIVE
+            keep = len(ts) if np.all(codes == Failure.OK) else int(np.argmax(codes != Failure.OK))
+            chunk = [np.asarray(arr)[:keep] for arr in (ts, q, v, acc, lam, w)] + [np.zeros(keep, int)]
+            for k, arr in zip(("t", "q", "v", "acc", "lam", "work", "iterations"), chunk):
+                rows[k].append(arr)
+            steps += int(nsteps)
+            if keep < len(ts):
+                status = int(codes[keep])
+                t_fail = float(ts[keep])
+                break
+            y, t_start = (q[-1], v[-1], w[-1]), float(ts[-1])
+            bar.update(len(ts) * out_dt)
+    except KeyboardInterrupt:
+        n = min(len(v) for v in rows.values())  # a chunk's rows are appended together
+        rows = {k: v[:n] for k, v in rows.items()}
+        if sum(len(x) for x in rows["t"]) < n_int + 1:
+            status, t_fail = Failure.INTERRUPTED, float(np.concatenate(rows["t"])[-1])
+    finally:
+        bar.close()
     wall = time.perf_counter() - tw
     cat = {k: np.concatenate(v)[: n_int + 1] for k, v in rows.items()}
     message = ""
     if status != Failure.OK:
         message = _failure_message(status, t_fail, system, options,
                                    last=(cat["q"][-1], cat["v"][-1], float(cat["t"][-1])),
-                                   max_steps=solver.max_steps)
+                                   max_steps=solver.max_steps, solver=name)
     res = Results(system=system, solver=name, dt=float(dt), wall_time_s=wall, compile_time_s=compile_s,
                   status=Failure(status).reason, failure_time=t_fail,
                   message=message, info=dict(steps=steps), **cat)
+    if status == Failure.INTERRUPTED and on_failure == "raise":
+        raise SimulationInterrupted(message, time=t_fail, results=res)
     if status != Failure.OK and on_failure == "raise":
         raise SimulationError(message, time=t_fail, reason=Failure(status).reason, results=res)
     return res

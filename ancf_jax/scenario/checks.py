@@ -2,7 +2,9 @@
 
 Run on the validated schema (:class:`~.schema.ScenarioSpec`) with host data only:
 names and their uniqueness, references to beams, bodies, joints and body points,
-node indices, arc lengths inside beams, keys that exclude or require each other.
+node indices, arc lengths inside beams, keys that exclude or require each other, the
+output interval inside the run, and every time function finite at the run's output
+times (evaluated with NumPy: nothing is compiled).
 The first problem raises :class:`~.errors.Invalid` with its key path.
 """
 
@@ -14,12 +16,15 @@ import numpy as np
 
 from . import schema as S
 from .errors import Invalid
+from .types import TimeFunctionSpec
 from .geometry import element_count, first_node, reference_length
 
 NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]{0,63}$")
 NAME_RULE = "a name of letters, digits, '_' and '-', starting with a letter or '_', at most 64 characters"
 POINT_FORMS = ('{ ground = [x, y] }, { body = "name" } with optional local = [x, y] or point = "p", '
                '{ beam = "name", node = i } or { beam = "name", s = arc length }')
+#: most output times at which the time functions are checked (a longer grid is sampled)
+MAX_CHECKED_TIMES = 100_001
 #: constraint equations of each joint type (clamp: by mode)
 JOINT_SIZE = {"pin": 2, "revolute": 2, "fixed": 3, "sliding": 2, "prescribed_point": 2,
               "prescribed_body": 1}
@@ -257,6 +262,38 @@ class Checker:
         if out is not None and out < sol.dt * (1 - 1e-9):
             raise Invalid(("outputs", "dt"), f"{out:g} s is shorter than solver.dt = {sol.dt:g} s",
                           f"a number >= {sol.dt:g} [s]")
+        if out is not None and out > sol.t_end * (1 + 1e-9):
+            raise Invalid(("outputs", "dt"), f"{out:g} s is longer than the run, solver.t_end = {sol.t_end:g} s",
+                          f"a number in {sol.dt:g} .. {sol.t_end:g} [s]")
+
+    def output_times(self) -> np.ndarray:
+        """The run's output times [s] (t = 0, every outputs.dt, t_end), as
+        :func:`ancf_jax.simulation.time_grid` places them; at most
+        :data:`MAX_CHECKED_TIMES` of them (evenly spread) on a longer grid."""
+        sol = self.spec.solver
+        step = self.spec.outputs.dt if self.spec.outputs.dt is not None else sol.dt
+        n = max(1, int(round(sol.t_end / step)))
+        if n + 1 > MAX_CHECKED_TIMES:
+            return np.linspace(0.0, sol.t_end, MAX_CHECKED_TIMES)
+        return sol.t_end / n * np.arange(n + 1)
+
+    def time_functions(self):
+        """Every expression finite at the output times and at statics.time."""
+        times = np.append(self.output_times(), self.spec.statics.time)
+        sol = self.spec.solver
+        for group in ("joints", "loads"):
+            for name, item in getattr(self.spec, group).items():
+                for key in type(item).model_fields:
+                    f = getattr(item, key)
+                    if not isinstance(f, TimeFunctionSpec) or f.kind != "expression":
+                        continue
+                    values = f.function.numpy(times)
+                    bad = ~np.isfinite(values)
+                    if np.any(bad):
+                        i = int(np.argmax(bad))
+                        raise Invalid((group, name, key), f"{f.text!r} is not finite at t = {times[i]:g} s "
+                                      f"(value {values[i]})", "a time function finite at every output "
+                                      f"time 0 .. {sol.t_end:g} s and at statics.time [s]")
 
     def outputs(self):
         for name, o in self.spec.outputs.columns.items():
@@ -322,6 +359,7 @@ class Checker:
         self.joints()
         self.loads()
         self.solver()
+        self.time_functions()
         self.outputs()
         self.fatigue()
 

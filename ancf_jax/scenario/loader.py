@@ -1,5 +1,5 @@
-"""Reading a scenario: file or shipped name → TOML → ``--set`` overrides → schema →
-cross-checks → :class:`~.scenario.Scenario`.
+"""Reading a scenario: file or shipped name → TOML (or JSON, for a ``.json`` file) →
+``--set`` overrides → schema → cross-checks → :class:`~.scenario.Scenario`.
 
 Everything here runs on the host with the standard library, pydantic and NumPy:
 nothing is built, traced or compiled before the whole file is known to be valid.
@@ -10,6 +10,7 @@ Every problem raises :class:`~.errors.ScenarioError` with one line
 from __future__ import annotations
 
 import importlib.resources
+import json
 import re
 import tomllib
 from pathlib import Path
@@ -25,6 +26,9 @@ from .errors import Invalid, ScenarioError
 #: largest scenario file read [bytes]
 MAX_SCENARIO_BYTES = 1024 * 1024
 _PACKAGE = "ancf_jax.models"
+#: suffixes of scenario files (a name without one and without a path separator is a
+#: shipped scenario); ``.json`` files are read as JSON, any other as TOML
+SUFFIXES = (".toml", ".json")
 
 
 def shipped_scenarios() -> list[str]:
@@ -36,15 +40,16 @@ def shipped_scenarios() -> list[str]:
 def resolve(source) -> Path:
     """The file of a scenario given by path or by shipped name.
 
-    A string without a path separator and without the ``.toml`` suffix names a shipped
-    scenario (``"m1"``); anything else is a path.
+    A string without a path separator and without a ``.toml`` or ``.json`` suffix names
+    a shipped scenario (``"m1"``); anything else is a path.
     """
     text = str(source)
-    if isinstance(source, str) and not text.endswith(".toml") and "/" not in text and "\\" not in text:
+    if (isinstance(source, str) and not text.lower().endswith(SUFFIXES) and "/" not in text
+            and "\\" not in text):
         if text in shipped_scenarios():
             return Path(str(importlib.resources.files(_PACKAGE) / f"{text}.toml"))
-        raise ScenarioError(text, (), "no such shipped scenario (and not a .toml path)",
-                            f"a path to a .toml file or one of {', '.join(shipped_scenarios())}")
+        raise ScenarioError(text, (), "no such shipped scenario (and not a .toml or .json path)",
+                            f"a path to a .toml or .json file or one of {', '.join(shipped_scenarios())}")
     return Path(text)
 
 
@@ -98,6 +103,28 @@ def _toml_error(file: str, err: tomllib.TOMLDecodeError) -> ScenarioError:
     what = re.sub(r"\s*\(at .*\)$", "", msg)
     return ScenarioError(file, where.group(1) if where else "TOML", f"invalid TOML: {what}",
                          "TOML 1.0 syntax, duplicate keys not allowed")
+
+
+def _json_error(file: str, err: json.JSONDecodeError) -> ScenarioError:
+    return ScenarioError(file, f"line {err.lineno}, column {err.colno}", f"invalid JSON: {err.msg}",
+                         "JSON (RFC 8259) with an object at the top, as the TOML format's tables")
+
+
+def _parse(file: str, path: Path, text: str) -> dict:
+    """The file's tables: JSON for a ``.json`` file, else TOML."""
+    if path.suffix.lower() == ".json":
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as e:
+            raise _json_error(file, e) from None
+        if not isinstance(data, dict):
+            raise ScenarioError(file, (), f"the top level is a JSON {type(data).__name__}, not an object",
+                                "a JSON object with the tables of the format")
+        return data
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise _toml_error(file, e) from None
 
 
 def _schema_error(file: str, err: dict) -> ScenarioError:
@@ -157,8 +184,8 @@ def load_scenario(source, overrides: Iterable[str] = ()):
     """Read, override, validate and check a scenario; nothing is built or compiled.
 
     Args:
-        source: a path to a ``.toml`` file, or the name of a shipped scenario
-            (see :func:`shipped_scenarios`).
+        source: a path to a ``.toml`` or ``.json`` file (the same tables in JSON), or
+            the name of a shipped scenario (see :func:`shipped_scenarios`).
         overrides: ``"key.path=value"`` items (the CLI's ``--set``), applied to the
             TOML data before validation.
 
@@ -180,11 +207,9 @@ def load_scenario(source, overrides: Iterable[str] = ()):
     except (OSError, UnicodeDecodeError) as e:
         reason = e.strerror if isinstance(e, OSError) and e.strerror else str(e)
         raise ScenarioError(file, (), f"cannot read the scenario file: {reason}",
-                            f"a readable UTF-8 .toml file or a shipped name: {', '.join(shipped_scenarios())}") from None
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise _toml_error(file, e) from None
+                            f"a readable UTF-8 .toml or .json file or a shipped name: "
+                            f"{', '.join(shipped_scenarios())}") from None
+    data = _parse(file, path, text)
     overridden = apply_overrides(data, overrides, file)
     spec, checker = validate(data, file, base_dir=path.parent, overridden=overridden)
     return Scenario(spec, path=path, overrides=tuple(overrides or ()), lengths=checker.lengths,

@@ -169,7 +169,7 @@ class Scenario:
         Returns:
             (system, configuration q, :class:`~ancf_jax.modal.ModalResult`).
         """
-        from ..modal import modal_analysis
+        from ..modal import degrees_of_freedom, modal_analysis
         n = self.modal_settings.modes if n_modes is None else n_modes
         if self.modal_settings.about == "equilibrium":
             system, sol = self.equilibrium()
@@ -177,7 +177,7 @@ class Scenario:
         else:
             system, state = self.build()
             q, lam = state.q, None
-        n = min(n, int(np.sum(~np.asarray(system.inactive_mask()))))
+        n = min(n, degrees_of_freedom(system))
         return system, jnp.asarray(q), modal_analysis(system, q, lam, n_modes=n)
 
     # ------------------------------------------------------------------ text

@@ -1,0 +1,276 @@
+"""Nothing lost, nothing silent (issue 25): bad input exits with status 2 and one line
+naming the option or key and what it accepts, before anything is compiled; Ctrl-C
+keeps what was computed and exits with status 130.
+
+Most cases fail before compiling and take well under a second; the Ctrl-C cases run a
+two-element pendulum for a few chunks.
+"""
+
+import csv
+import json
+import os
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from ancf_jax import simulation
+from ancf_jax.cli import main
+from ancf_jax.errors import ModelError, SimulationInterrupted
+from ancf_jax.failures import Failure
+from ancf_jax.simulation import MAX_STEPS, check_run_size
+
+M1 = Path(__file__).resolve().parents[1] / "ancf_jax" / "models" / "m1.toml"
+
+
+def run_cli(argv, capsys):
+    """(exit status, stdout, the stderr lines) of ``ancf-jax argv``."""
+    try:
+        code = main(argv)
+    except SystemExit as e:  # argparse's own errors
+        code = e.code
+    out = capsys.readouterr()
+    return code, out.out, out.err.strip().splitlines()
+
+
+def usage_error(argv, capsys, *fragments):
+    """Assert exit 2 with one stderr line containing every fragment; returns the line."""
+    code, _, err = run_cli(argv, capsys)
+    assert code == 2, (code, err)
+    assert len(err) == 1, err
+    for f in fragments:
+        assert f in err[0], err[0]
+    return err[0]
+
+
+# ------------------------------------------------------------------ 1. output locations
+def out_commands(out):
+    """Every subcommand with --out, given output location ``out``."""
+    return [["run", "m1", "--out", str(out)],
+            ["fatigue", "m1", "--out", str(out)],
+            ["fit", "m1", "--data", "nothing.csv", "--out", str(out)],
+            ["synth", "m1", "--noise", "0", "--out", str(out / "data.csv") if out.is_dir() else str(out)]]
+
+
+def test_out_that_is_a_file_is_refused_before_compiling(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    for argv in out_commands(afile)[:3]:
+        usage_error(argv, capsys, "argument --out", "not a directory", "accepted:")
+    usage_error(["synth", "m1", "--noise", "0", "--out", str(tmp_path)], capsys,
+                "argument --out", "is a directory")
+    assert afile.read_text() == "x"
+
+
+def test_out_under_a_file_is_refused(tmp_path, capsys):
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    for argv in out_commands(afile / "sub"):
+        usage_error(argv, capsys, "argument --out", "which is not a directory")
+
+
+def test_out_in_a_read_only_directory_is_refused(tmp_path, capsys):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o500)
+    try:
+        if os.access(ro, os.W_OK):
+            pytest.skip("running as root: a read-only directory is still writable")
+        for argv in out_commands(ro / "new"):
+            usage_error(argv, capsys, "argument --out", "not writable")
+    finally:
+        ro.chmod(0o700)
+
+
+# ------------------------------------------------------------------ 2. Ctrl-C
+class _InterruptingBar:
+    """A progress bar whose second update raises KeyboardInterrupt (as Ctrl-C would
+    between two chunks)."""
+
+    def __init__(self, *a, **k):
+        self.updates = 0
+
+    def update(self, n):
+        self.updates += 1
+        if self.updates == 2:
+            raise KeyboardInterrupt
+
+    def close(self):
+        pass
+
+
+@pytest.fixture
+def interrupting(monkeypatch):
+    monkeypatch.setattr(simulation, "_progress", _InterruptingBar)
+    monkeypatch.setattr(simulation, "STEPS_PER_CHUNK", 5)  # 20 steps: 4 chunks
+
+
+def pendulum():
+    from ancf_jax.scenario import load_scenario
+    return load_scenario("flexible_pendulum", ["beams.pendulum.elements=2", "solver.t_end=0.02",
+                                               "solver.dt=1e-3", "outputs.dt=1e-3"])
+
+
+def test_ctrl_c_keeps_the_chunks_computed(interrupting):
+    sc = pendulum()
+    system, state = sc.build()
+    kw = sc.solver.simulate_kwargs()
+    res = simulation.simulate(system, state, **{**kw, "on_failure": "return"})
+    assert res.status == "interrupted" == Failure.INTERRUPTED.reason
+    assert len(res.t) == 1 + 2 * 5  # the initial row and two chunks
+    assert res.failure_time == pytest.approx(res.t[-1])
+    assert "interrupted" in res.message and "\n" not in res.message
+    with pytest.raises(SimulationInterrupted) as err:
+        simulation.simulate(system, state, **kw)
+    assert isinstance(err.value, KeyboardInterrupt) and not isinstance(err.value, Exception)
+    assert len(err.value.results.t) == 11
+
+
+def test_ctrl_c_in_a_batch_keeps_every_member(interrupting):
+    sc = pendulum()
+    system, state = sc.build()
+    kw = {**sc.solver.simulate_kwargs(), "on_failure": "return"}
+    out = simulation.simulate_batch([system, system], [state, state], **kw)
+    assert [r.status for r in out] == ["interrupted"] * 2
+    assert all(len(r.t) < 21 for r in out)
+
+
+def test_run_interrupted_writes_results_and_exits_130(interrupting, tmp_path, capsys):
+    out = tmp_path / "pend"
+    code, _, err = run_cli(["run", "flexible_pendulum", "--set", "beams.pendulum.elements=2",
+                            "--t-end", "0.02", "--dt", "1e-3", "--output-dt", "1e-3", "--out", str(out),
+                            "--no-figures"], capsys)
+    assert code == 130
+    assert len(err) == 1 and "interrupted" in err[0]
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["runs"]["flexible_pendulum"]["status"] == "interrupted"
+    with open(out / "flexible_pendulum.csv") as f:
+        rows = list(csv.reader(f))
+    assert 1 < len(rows) - 1 < 21
+
+
+# ------------------------------------------------------------------ 3. runaway runs
+@pytest.mark.parametrize("argv,fragment", [
+    (["run", "m1", "--dt", "1e-12"], "--dt = 1e-12 s"),
+    (["run", "m1", "--t-end", "1e9"], "--t-end = 1e+09 s"),
+    (["fatigue", "m1", "--dt", "1e-12"], "--dt = 1e-12 s"),
+])
+def test_runaway_runs_are_refused_with_the_estimate(argv, fragment, capsys):
+    line = usage_error(argv, capsys, fragment, "time steps", "--max-steps")
+    assert "2e+12" in line or "1e+12" in line
+
+
+def test_max_steps_is_checked_and_lifts_the_limit():
+    n = MAX_STEPS * 2
+    with pytest.raises(ModelError, match=r"max_steps"):
+        check_run_size(n * 1e-3, 1e-3, 1.0, 10)
+    steps, size = check_run_size(n * 1e-3, 1e-3, 1.0, 10, max_steps=n)
+    assert steps == n and size < 2**30
+    with pytest.raises(ModelError, match=r"GiB of output"):
+        check_run_size(1e6, 1e-3, None, 10_000, max_steps=10**10)
+
+
+def test_adaptive_runs_count_output_not_steps():
+    check_run_size(1.0, 1e-12, 1e-3, 10, fixed_step=False)
+    with pytest.raises(ModelError, match="output"):
+        check_run_size(1.0, 1e-12, None, 10, fixed_step=False)
+
+
+# ------------------------------------------------------------------ 4. time functions, messages
+@pytest.mark.parametrize("expr,value", [("1/t", "inf"), ("log(t)", "-inf"), ("1e400*t", "nan")])
+def test_time_functions_not_finite_on_the_grid_are_refused(expr, value, capsys):
+    load = f'loads.spin={{type="torque", body="tip", torque=1.0, time_function="{expr}"}}'
+    for command in ("check", "run"):
+        usage_error([command, "m1", "--set", load], capsys, "loads.spin.time_function", repr(expr),
+                    "not finite at t = 0 s", f"value {value}")
+
+
+def test_prescribed_motion_not_finite_later_names_the_joint(tmp_path, capsys):
+    data = tomllib.loads(M1.read_text())
+    data["joints"]["drive"] = {"type": "prescribed_body", "body": "tip", "coordinate": "theta",
+                               "value": "sqrt(1 - t)"}
+    path = tmp_path / "m1.json"
+    path.write_text(json.dumps(data))
+    usage_error(["check", str(path)], capsys, "joints.drive.value", "not finite at t = 1.001 s")
+
+
+def test_failure_messages_name_the_solver():
+    nan = Failure.NAN.message(0.5, solver="rk4")
+    assert "rk4" in nan and "Newton" not in nan
+    newton = Failure.NEWTON.message(0.5, solver="generalized-alpha")
+    assert "implicit generalized-alpha step" in newton
+    assert "tsit5" in Failure.ADAPTIVE.explanation(solver="tsit5", max_steps=10)
+
+
+# ------------------------------------------------------------------ 5. silent acceptances
+def test_zero_length_ramp_is_refused(capsys):
+    load = 'loads.spin={type="torque", body="tip", torque=1.0, time_function="ramp(t, 1, 1)"}'
+    usage_error(["check", "m1", "--set", load], capsys, "loads.spin.time_function", "t1 > t0",
+                "zero-length")
+
+
+def test_empty_element_count_is_refused(capsys):
+    usage_error(["run", "m2", "--elements", "6,,"], capsys, "argument --elements", "'6,,'")
+
+
+def test_output_interval_longer_than_the_run_is_refused(capsys):
+    usage_error(["run", "m1", "--t-end", "0.5", "--output-dt", "1"], capsys, "outputs.dt",
+                "longer than the run", "0.001 .. 0.5")
+
+
+def test_more_modes_than_degrees_of_freedom_names_the_maximum(capsys):
+    usage_error(["modal", "m1", "--modes", "10000"], capsys, "argument --modes", "1 .. 24")
+
+
+# ------------------------------------------------------------------ 6. JSON scenarios
+def test_json_scenario_is_read_as_documented(tmp_path, capsys, monkeypatch):
+    data = tomllib.loads(M1.read_text())
+    (tmp_path / "m1.json").write_text(json.dumps(data, indent=1))
+    monkeypatch.chdir(tmp_path)
+    for source in ("m1.json", "./m1.json", str(tmp_path / "m1.json")):
+        code, out, err = run_cli(["check", source], capsys)
+        assert code == 0, err
+        assert "valid scenario 'm1'" in out and "tip_y" in out
+    (tmp_path / "bad.json").write_text('{"solver": {"t_end": 1.0,}}')
+    usage_error(["check", "bad.json"], capsys, "bad.json: line 1, column", "invalid JSON")
+
+
+# ------------------------------------------------------------------ 7. joints in check
+def test_check_finds_conflicting_joints(capsys):
+    pin = 'joints.pin={type="pin", point={beam="beam", node=0}, location=[0.1, 0.0]}'
+    line = usage_error(["check", "m1", "--set", pin], capsys, "conflicting", "clamp", "pin")
+    assert "redundant" not in line
+
+
+def test_check_finds_redundant_joints(capsys):
+    pin = 'joints.pin={type="pin", point={beam="beam", node=0}}'
+    usage_error(["check", "m1", "--set", pin], capsys, "redundant", "clamp", "pin")
+
+
+def test_run_refuses_conflicting_joints_with_one_line(capsys, tmp_path):
+    pin = 'joints.pin={type="pin", point={beam="beam", node=0}, location=[0.1, 0.0]}'
+    usage_error(["run", "m1", "--set", pin, "--out", str(tmp_path / "o")], capsys, "conflicting")
+    assert not (tmp_path / "o").exists()
+
+
+# ------------------------------------------------------------------ 8. modal names, [modal] table
+def test_modal_about_accepts_the_schema_names_and_the_old_aliases(capsys):
+    freqs = {}
+    for about in ("equilibrium", "static", "initial", "reference"):
+        code, out, err = run_cli(["modal", "m1", "--about", about, "--modes", "2", "--json"], capsys)
+        assert code == 0, err
+        freqs[about] = json.loads(out)["frequencies_hz"]
+    assert freqs["equilibrium"] == freqs["static"] and freqs["initial"] == freqs["reference"]
+    assert freqs["equilibrium"] != freqs["initial"]  # the stress stiffness counts
+
+
+def test_modal_honours_the_modal_table(capsys):
+    code, out, _ = run_cli(["modal", "m1", "--set", "modal.modes=3", "--json"], capsys)
+    assert code == 0 and len(json.loads(out)["frequencies_hz"]) == 3
+    usage_error(["modal", "m1", "--set", "modal.modes=500"], capsys, "modal.modes", "1 .. 24")
+
+
+def test_check_help_says_what_set_does(capsys):
+    code, out, _ = run_cli(["check", "--help"], capsys)
+    assert code == 0 and "override a scenario key" in out
