@@ -54,9 +54,11 @@ def create(path, definition: dict, values: dict[str, list], times: np.ndarray, o
     t = len(times)
     coords = {"member": np.arange(n), "time": np.asarray(times, float)}
     for key, v in values.items():
-        arr = np.asarray(v)
-        if arr.dtype.kind in "OU":
-            arr = np.asarray([str(x) for x in v], dtype="<U64")
+        if any(isinstance(x, (list, tuple, str, dict)) for x in v):  # vectors, names: their TOML text
+            from .design import override
+            arr = np.asarray([override("v", x)[2:] for x in v], dtype="<U64")
+        else:
+            arr = np.asarray(v)
         coords[key] = ("member", arr)
     data = {name: (("member", "time"), np.broadcast_to(np.nan, (n, t))) for name in outputs}
     data.update(status=("member", np.full(n, "", f"<U{STATUS_WIDTH}")),
