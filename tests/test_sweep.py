@@ -244,3 +244,21 @@ def test_ray_equals_local_with_a_worker_killed(ray_cluster, local_store, tmp_pat
         np.testing.assert_allclose(ds[name].values, local[name].values, rtol=1e-12, atol=1e-15)
     run = json.loads(ds.attrs["runs"])[0]
     assert run["backend"] == "ray" and run["cpus"] == 2.0
+
+
+# ---------------------------------------------------------------------------- devices
+def test_local_backend_shards_across_host_devices(local_store, tmp_path):
+    """Two CPU host devices (XLA flag, a fresh process): each chunk is one program
+    sharded across both; the numbers equal the one-device store."""
+    _, local, _, _ = local_store
+    out = tmp_path / "two.zarr"
+    code = (f"from ancf_jax.sweep import run_sweep\n"
+            f"run_sweep('m1', {PARAMS!r}, out={str(out)!r}, design='grid', levels=2, "
+            f"overrides={BASE!r}, chunk_size=2, progress=False)\n")
+    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=2",
+               PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
+    subprocess.run([sys.executable, "-c", code], check=True, env=env, cwd=ROOT, timeout=600)
+    ds = xr.open_zarr(out)
+    assert json.loads(ds.attrs["runs"])[0]["devices"] == ["cpu:0", "cpu:1"]
+    for name in ("tip_x", "tip_y", "sigma_e1_mid"):
+        np.testing.assert_allclose(ds[name].values, local[name].values, rtol=1e-12, atol=1e-15)
