@@ -120,6 +120,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--animate", action="store_true", help="also write an animation (GIF)")
     run.add_argument("--no-figures", action="store_true", help="skip the figures")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    run.add_argument("--vtk", action="store_true",
+                     help="also write VTK files for ParaView (DIR/vtk/NAME.pvd; needs the sweep extra)")
 
     static = sub.add_parser("static", help="static equilibrium (sliding joints held)")
     common(static, "element count of the (single) beam")
@@ -330,6 +332,11 @@ def _run(args) -> int:
         r = results[0]
         print(f"{base.name}: {len(runs)} run(s), {r.solver}, dt = {r.dt:g} s, t_end = {r.t[-1]:g} s; "
               f"compile {r.compile_time_s:.1f} s, run {sum(x.wall_time_s for x in results):.2f} s -> {out}/")
+    if args.vtk:
+        from .sweep.vtk import write_vtk
+        for k, r in runs.items():
+            name = base.name if k == "" or len(runs) == 1 else f"{base.name}_n{k}"
+            print(f"VTK: {write_vtk(r, out / 'vtk', name=name)}")
     failed = [f"{'' if k == '' else f'{k} elements: '}{r.message}" for k, r in runs.items() if r.status != "ok"]
     for msg in failed:
         print(f"ancf-jax run: {msg} (results up to then are written)", file=sys.stderr)

@@ -262,3 +262,30 @@ def test_local_backend_shards_across_host_devices(local_store, tmp_path):
     assert json.loads(ds.attrs["runs"])[0]["devices"] == ["cpu:0", "cpu:1"]
     for name in ("tip_x", "tip_y", "sigma_e1_mid"):
         np.testing.assert_allclose(ds[name].values, local[name].values, rtol=1e-12, atol=1e-15)
+
+
+# ---------------------------------------------------------------------------- VTK
+def test_run_vtk_reads_back(tmp_path, capsys):
+    meshio = pytest.importorskip("meshio")
+    import xml.etree.ElementTree as ET
+    from ancf_jax.scenario import load_scenario
+    out = tmp_path / "run"
+    assert main(["run", "m1", "--elements", "3", "--t-end", "0.02", "--dt", "2e-3", "--output-dt", "2e-3",
+                 "--no-figures", "--no-progress", "--vtk", "--out", str(out)]) == 0
+    capsys.readouterr()
+    pvd = ET.parse(out / "vtk" / "m1.pvd").getroot()
+    sets = pvd.findall("./Collection/DataSet")
+    assert [float(d.get("timestep")) for d in sets] == pytest.approx(np.linspace(0, 0.02, 11))
+    r = load_scenario("m1", BASE).simulate(progress=False)
+    last = meshio.read(out / "vtk" / sets[-1].get("file"))
+    beam = last.point_data["beam"] == 0
+    assert {"stress", "curvature", "axial_force"} <= set(last.point_data)
+    np.testing.assert_allclose(last.points[~beam][0, :2], r.body("tip")[-1, :2], rtol=1e-12)
+    np.testing.assert_allclose(last.points[beam][0, :2], [0.0, 0.0], atol=1e-12)  # the clamp
+    np.testing.assert_allclose(last.point_data["stress"][beam][0], r.stress("beam", 0.0)[-1], rtol=1e-9)
+    np.testing.assert_allclose(last.point_data["axial_force"][beam][2], r.axial_force("beam", 0.402 / 3 * 0.5)[-1],
+                               rtol=1e-9, atol=1e-9)
+    # curvature: σ = E y (κ − κ₀) on the outer fibre of the straight (κ₀ = 0) wire
+    np.testing.assert_allclose(last.point_data["stress"][beam],
+                               -200e9 * 0.5e-3 * last.point_data["curvature"][beam], rtol=1e-6)
+    assert len(last.cells_dict["line"]) == 3 * 4 and len(last.cells_dict["vertex"]) == 1
