@@ -163,7 +163,7 @@ def make_design(params: Sequence[Param], design: str = "lhs", *, samples: int | 
         design: ``"grid"`` (every combination; ranges at ``levels`` points, lists at
             their values), ``"random"`` (uniform), ``"lhs"`` (Latin hypercube),
             ``"sobol"`` (scrambled Sobol sequence), ``"saltelli"`` (SALib's Saltelli
-            design of ``samples * (2 d + 2)`` members for Sobol indices; ranges only).
+            design of ``samples * (d + 2)`` members for first-order and total Sobol indices; ranges only).
         samples: number of members (random, lhs, sobol), base samples (saltelli).
         levels: grid levels of each range (grid).
         seed: random seed (random, lhs, sobol, saltelli).
