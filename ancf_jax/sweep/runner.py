@@ -285,7 +285,10 @@ def run_sweep(model: str, params: Sequence[Param | str], *, out, design: str = "
         params: :class:`~ancf_jax.sweep.design.Param` or ``"KEY=LOW:HIGH[:log]"`` /
             ``"KEY=[V1, V2]"`` strings.
         out: the Zarr store (a directory; must not exist unless ``resume``).
-        design, samples, levels, seed: see :func:`~ancf_jax.sweep.design.make_design`.
+        design: the design (see :func:`~ancf_jax.sweep.design.make_design`).
+        samples: members (random, lhs, sobol) or base samples (saltelli).
+        levels: grid levels per range.
+        seed: design seed.
         overrides: ``--set`` items applied to every member.
         backend: ``"local"`` (this process, the batch sharded across ``jax.devices()``)
             or ``"ray"`` (chunks as Ray tasks; ``address`` of a running cluster, None: the
