@@ -154,9 +154,9 @@ def test_store_equals_direct_simulate(local_store):
 
 
 def test_failing_member_does_not_stop_the_sweep(tmp_path):
-    # an alpha that makes no difference, and a Newton limit of 1 iteration that fails
+    # a Newton limit of 1 iteration fails, 50 do not
     out = tmp_path / "f.zarr"
-    ds = run_sweep("m1", ["solver.generalized-alpha.max_iterations=[1, 50]"], out=out, design="grid",
+    ds = run_sweep("m1", ["solver.generalized_alpha.max_iterations=[1, 50]"], out=out, design="grid",
                    overrides=BASE, chunk_size=2, progress=False).load()
     status = list(ds["status"].values)
     assert status[1] == "ok" and status[0] != "ok", status
