@@ -1,6 +1,6 @@
 """Command-line interface ``ancf-jax``.
 
-``ancf-jax run|static|modal|check|fatigue|synth|fit MODEL [options]`` with MODEL a shipped
+``ancf-jax run|static|modal|check|fatigue|sweep|synth|fit MODEL [options]`` with MODEL a shipped
 scenario (m1, m2, …) or a scenario file (TOML or JSON); see ``ancf-jax COMMAND --help``.
 
 Exit status:
@@ -139,6 +139,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--animate", action="store_true", help="also write an animation (GIF)")
     run.add_argument("--no-figures", action="store_true", help="skip the figures")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
+    run.add_argument("--vtk", action="store_true",
+                     help="also write VTK files for ParaView (DIR/vtk/NAME.pvd; needs the sweep extra)")
 
     static = sub.add_parser("static", help="static equilibrium (sliding joints held)")
     common(static, "element count of the (single) beam")
@@ -198,6 +200,31 @@ def build_parser() -> argparse.ArgumentParser:
     synth.add_argument("--seed", type=_nonnegative_int, default=0, help="seed of the noise (default 0)")
     synth.add_argument("--output", default="tip_y", help="output column to sample (default tip_y)")
     synth.add_argument("--out", type=Path, required=True, help="CSV file to write")
+
+    sweep = sub.add_parser("sweep", help="parameter sweep into a Zarr store (local devices or Ray)",
+                           description="Run a design over dotted scenario keys (--param KEY=LOW:HIGH, "
+                                       "KEY=LOW:HIGH:log, KEY=[V1, V2, ...]) in vmapped chunks, locally or "
+                                       "on a Ray cluster, into an xarray/Zarr store that --resume completes.")
+    sweep.add_argument("model", metavar="MODEL", help="m1, m2, another shipped scenario, or FILE.toml")
+    sweep.add_argument("--param", dest="params", action="append", default=[], metavar="KEY=LOW:HIGH",
+                       help="swept key: KEY=LOW:HIGH, KEY=LOW:HIGH:log or KEY=[V1, V2, ...]; repeatable")
+    sweep.add_argument("--design", choices=("grid", "random", "lhs", "sobol", "saltelli"), default="lhs",
+                       help="grid, random, lhs (default), sobol, or saltelli (for Sobol indices)")
+    sweep.add_argument("--samples", type=_positive_int, default=None,
+                       help="members (random, lhs, sobol) or base samples (saltelli)")
+    sweep.add_argument("--levels", type=_int_at_least(2), default=3, help="grid levels per range (default 3)")
+    sweep.add_argument("--seed", type=_nonnegative_int, default=0, help="design seed (default 0)")
+    sweep.add_argument("--backend", choices=("local", "ray"), default="local",
+                       help="local (this process, all its devices) or ray")
+    sweep.add_argument("--address", default=None, help="Ray cluster address (default: a new local one)")
+    sweep.add_argument("--chunk-size", type=_positive_int, default=None,
+                       help="members per vmapped chunk (default: sized to memory)")
+    sweep.add_argument("--resume", action="store_true", help="complete an interrupted sweep in --out")
+    sweep.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
+                       help="override a scenario key for every member; repeatable")
+    sweep.add_argument("--out", type=Path, required=True, help="the Zarr store (a directory)")
+    sweep.add_argument("--netcdf", type=Path, default=None, help="also export the store to this NetCDF file")
+    sweep.add_argument("--no-progress", action="store_true", help="no progress bar")
 
     fit = sub.add_parser("fit", help="identify Rayleigh alpha, beta (and E, tip_mass) from measured data",
                          description="Fit model parameters to measured samples t,y of a model output "
@@ -402,6 +429,11 @@ def _run(args) -> int:
         r = results[0]
         print(f"{base.name}: {len(runs)} run(s), {r.solver}, dt = {r.dt:g} s, t_end = {r.t[-1]:g} s; "
               f"compile {r.compile_time_s:.1f} s, run {sum(x.wall_time_s for x in results):.2f} s -> {out}/")
+    if args.vtk:
+        from .sweep.vtk import write_vtk
+        for k, r in runs.items():
+            name = base.name if k == "" or len(runs) == 1 else f"{base.name}_n{k}"
+            print(f"VTK: {write_vtk(r, out / 'vtk', name=name)}")
     return _problems("run", runs)
 
 
@@ -445,6 +477,35 @@ def _fatigue(args) -> int:
         print(f"ancf-jax fatigue: {r.message} (damage of the run up to then is written)", file=sys.stderr)
         return 130 if r.status == "interrupted" else 1
     return 0
+
+
+def _sweep(args) -> int:
+    try:
+        from .sweep import SweepError, parse_param, run_sweep
+        from .sweep.store import to_netcdf
+    except ImportError as e:
+        raise _UsageError(str(e)) from None
+    if args.address is not None and args.backend != "ray":
+        raise _UsageError("argument --address: needs --backend ray")
+    if args.design != "grid" and args.samples is None:
+        raise _UsageError(f"argument --samples: the {args.design} design needs --samples N")
+    try:
+        params = [parse_param(p) for p in args.params]
+        ds = run_sweep(args.model, params, out=args.out, design=args.design, samples=args.samples,
+                       levels=args.levels, seed=args.seed, overrides=args.overrides, backend=args.backend,
+                       address=args.address, resume=args.resume, chunk_size=args.chunk_size,
+                       progress=False if args.no_progress else None)
+    except SweepError as e:
+        raise _UsageError(str(e)) from None
+    status = ds["status"].values
+    counts = {s: int((status == s).sum()) for s in sorted(set(status.tolist()))}
+    run = json.loads(ds.attrs["runs"])[-1]
+    if args.netcdf is not None:
+        to_netcdf(args.out, args.netcdf)
+    summary = ", ".join(f"{v} {k or 'missing'}" for k, v in counts.items())
+    print(f"{args.model}: {len(status)} members ({summary}); "
+          f"this run {run['stored']} members in {run['wall_s']:.1f} s on {run['backend']} -> {args.out}")
+    return 0 if counts.get("ok", 0) == len(status) else 1
 
 
 def _static_data(sc):
@@ -650,7 +711,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     try:
         return {"run": _run, "static": _static, "modal": _modal, "check": _check, "synth": _synth,
-                "fit": _fit, "fatigue": _fatigue}[args.command](args)
+                "fit": _fit, "fatigue": _fatigue, "sweep": _sweep}[args.command](args)
     except _UsageError as e:
         print(f"ancf-jax {args.command}: error: {e}", file=sys.stderr)
         return 2

@@ -369,8 +369,8 @@ def _signature(args):
     """Hashable description of arguments: tree structure (with static fields), shapes
     and dtypes of arrays, values of everything else."""
     leaves, treedef = jax.tree.flatten(args)
-    sig = tuple((tuple(np.shape(x)), str(np.asarray(x).dtype)) if eqx.is_array(x) else ("static", x)
-                for x in leaves)
+    sig = tuple((tuple(np.shape(x)), str(x.dtype), getattr(x, "sharding", None)) if eqx.is_array(x)
+                else ("static", x) for x in leaves)
     return treedef, sig
 
 
@@ -489,7 +489,8 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
                    max_halvings: int = DEFAULT_HALVINGS, on_failure: str = "raise",
                    progress: bool | None = None,
                    chunks: int | None = None, solver_options: dict | None = None,
-                   max_steps: int | None = None, max_output_bytes: int | None = None) -> list[Results]:
+                   max_steps: int | None = None, max_output_bytes: int | None = None,
+                   devices=None) -> list[Results]:
     """Simulate several systems of identical structure in ONE jitted, vmapped program.
 
     Systems differ only in array data: parameter values (α, masses, s₀, …) or meshes of
@@ -498,6 +499,10 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
     reported per result as the batch total divided by the batch size, and in
     ``info["batch_wall_time_s"]``. Arguments as for :func:`simulate` (fixed-step solvers;
     ``max_output_bytes`` counts the output of all members).
+
+    ``devices`` (a list of JAX devices, e.g. ``jax.devices()``) shards the batch across
+    them (the batch size must be a multiple of their number): one program, each device
+    runs its share of the members.
 
     Raises:
         SimulationError: a member failed and ``on_failure="raise"``; ``err.results`` is
@@ -525,6 +530,8 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
     check_run_size(t_end, dt, output_dt, int(np.size(states[0].q)), int(systems[0].n_constraints),
                    batch=len(systems), max_steps=max_steps, max_output_bytes=max_output_bytes)
     bs, bst = stack(systems), stack(states)
+    if devices is not None and len(devices) > 1:
+        bs, bst = _shard((bs, bst), list(devices), len(systems))
     segs, loop, compile_s, wall, interrupted = _run_fixed(bs, bst, solver, t0, n_int, sub, h, per_chunk,
                                                           n_chunks, options, progress, len(systems))
     out = []
@@ -542,6 +549,17 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
         first = next(r for r in out if r.status != "ok")
         raise SimulationError("; ".join(bad), time=first.failure_time, reason=first.status, results=out)
     return out
+
+
+def _shard(tree, devices, batch: int):
+    """Place the batched arrays of ``tree`` (leading axis ``batch``) split across ``devices``."""
+    if batch % len(devices):
+        raise ModelError(f"simulate_batch: the batch size {batch} must be a multiple of the "
+                         f"{len(devices)} devices it is sharded across")
+    from jax.sharding import Mesh, NamedSharding, PartitionSpec
+    sharding = NamedSharding(Mesh(np.asarray(devices), ("batch",)), PartitionSpec("batch"))
+    return jax.tree.map(lambda x: jax.device_put(x, sharding)
+                        if eqx.is_array(x) and np.ndim(x) >= 1 and np.shape(x)[0] == batch else x, tree)
 
 
 @eqx.filter_jit
