@@ -5,12 +5,18 @@ Implements Seo, Jung & Park, "Nonlinear Dynamic Analysis of a Large Deformable B
 Using Absolute Nodal Coordinates" (planar ANCF beam, Eqs. 1–21) and goes beyond it.
 
 Importing the package turns on float64 in JAX: the stiff axial modes of a steel wire
-make float32 simulations diverge.
+make float32 simulations diverge. It also turns on JAX's persistent compilation cache
+(``~/.cache/ancf_jax/xla``; ``ANCF_JAX_CACHE=0`` turns it off, see
+:mod:`ancf_jax._cache`), so a model compiled once starts at once in later processes.
 """
 
 import jax as _jax
 
 _jax.config.update("jax_enable_x64", True)
+
+from ._cache import configure_compilation_cache as _configure_compilation_cache  # noqa: E402
+
+_configure_compilation_cache()
 
 from ._version import __version__  # noqa: E402
 from .errors import (ConstraintError, ModelError, SimulationError, SimulationInterrupted,  # noqa: E402

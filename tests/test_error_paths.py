@@ -127,15 +127,6 @@ def test_ctrl_c_keeps_the_chunks_computed(interrupting):
     assert len(err.value.results.t) == 11
 
 
-def test_ctrl_c_in_a_batch_keeps_every_member(interrupting):
-    sc = pendulum()
-    system, state = sc.build()
-    kw = {**sc.solver.simulate_kwargs(), "on_failure": "return"}
-    out = simulation.simulate_batch([system, system], [state, state], **kw)
-    assert [r.status for r in out] == ["interrupted"] * 2
-    assert all(len(r.t) < 21 for r in out)
-
-
 def test_run_interrupted_writes_results_and_exits_130(interrupting, tmp_path, capsys):
     out = tmp_path / "pend"
     code, _, err = run_cli(["run", "flexible_pendulum", "--set", "beams.pendulum.elements=2",
