@@ -3,19 +3,9 @@ hot spot and the damage along the beams."""
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-
-def _finish(fig, path):
-    fig.tight_layout()
-    if path is not None:
-        fig.savefig(path, dpi=130)
-        plt.close(fig)
-    return fig
+from ..plotting import _finish, plt  # the project's one figure setup (Agg) and saving
 
 
 def cycle_histogram(ranges, counts, *, bins: int = 30, title: str = "", path=None):
