@@ -122,9 +122,11 @@ def check_run_size(t_end: float, dt: float, output_dt: float | None, n_coordinat
     """Refuse a runaway run before anything is compiled.
 
     Args:
-        t_end, dt, output_dt: the run's end time, step and output interval [s]
-            (as :func:`time_grid` takes them).
-        n_coordinates, n_multipliers: size of q and of the multipliers of the system.
+        t_end: the run's end time [s] (as :func:`time_grid` takes it).
+        dt: the step [s].
+        output_dt: the output interval [s] (None: every step).
+        n_coordinates: size of q.
+        n_multipliers: number of multipliers of the system.
         batch: number of batch members (output of each is kept).
         fixed_step: count steps (adaptive solvers choose theirs: only the output is
             checked).

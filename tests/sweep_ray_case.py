@@ -1,4 +1,5 @@
-"""The Ray case of ``tests/test_sweep.py``, run in a spawned interpreter: Ray's native
+"""The Ray and device-sharding cases of ``tests/test_sweep.py``, run in one spawned
+interpreter started with two XLA host devices (``XLA_FLAGS``): Ray's native
 libraries (its core worker, gRPC, Abseil) never load into the pytest workers that
 compile the rest of the suite's JAX programs (a worker that had started Ray in-process
 later segfaulted inside XLA, as workers with Exudyn loaded had before; see
@@ -53,3 +54,14 @@ def sweep_on_ray_killing_a_worker(params, out, kw, root):
     finally:
         ray.shutdown()
     return seen, killed
+
+
+def sweep_sharded_across_two_host_devices(params, out, kw):
+    """The local backend in this interpreter, which has two host devices: each chunk is
+    one program sharded across both. Returns the devices the run recorded."""
+    import jax
+
+    from ancf_jax.sweep import run_sweep
+    assert len(jax.devices()) == 2, jax.devices()
+    run_sweep("m1", params, out=out, **kw)
+    return [str(d) for d in jax.devices()]

@@ -9,7 +9,6 @@ shared by the local runs, the Ray workers (persistent compilation cache) and the
 
 import json
 import os
-import subprocess
 import sys
 from pathlib import Path
 
@@ -185,21 +184,49 @@ def test_cli_sweep_resumes_the_api_run(tmp_path, capsys):
     assert main(wrong) == 2 and "different sweep" in capsys.readouterr().err
 
 
-# ---------------------------------------------------------------------------- Ray
-def test_ray_equals_local_with_a_worker_killed(local_store, tmp_path):
-    """The sweep on a local Ray cluster (2 CPUs on 127.0.0.1), one worker killed
-    mid-chunk: every member comes back exactly once and equals the local backend. Ray
-    runs in a spawned interpreter (tests/sweep_ray_case.py), never in this worker."""
+# ---------------------------------------------------------------------------- Ray, devices
+@pytest.fixture(scope="module")
+def spawned(tmp_path_factory):
+    """One spawned interpreter with two XLA host devices (tests/sweep_ray_case.py): the
+    local backend sharded across both devices, then the sweep on a local Ray cluster
+    (2 CPUs on 127.0.0.1) with one worker killed mid-chunk. Ray never loads into this
+    pytest worker. Returns {case: (store path, what the case returned)}."""
     import importlib.util
     import multiprocessing as mp
-    if importlib.util.find_spec("ray") is None:  # found, not imported (see the docstring)
-        pytest.skip("ray is not installed (it is in the test extra)")
     from concurrent.futures import ProcessPoolExecutor
-    _, local, _, _ = local_store
-    out = tmp_path / "ray.zarr"
-    with ProcessPoolExecutor(max_workers=1, mp_context=mp.get_context("spawn")) as pool:
-        seen, killed = pool.submit(_ray_case, PARAMS, str(out), KW, str(ROOT)).result()
+    tmp = tmp_path_factory.mktemp("spawned")
+    old = os.environ.get("XLA_FLAGS")
+    os.environ["XLA_FLAGS"] = "--xla_force_host_platform_device_count=2"  # for the child only
+    try:
+        pool = ProcessPoolExecutor(max_workers=1, mp_context=mp.get_context("spawn"))
+        shard = pool.submit(_case, "sweep_sharded_across_two_host_devices", PARAMS, str(tmp / "two.zarr"), KW)
+        shard.result()  # the child has started and read its environment
+    finally:
+        if old is None:
+            os.environ.pop("XLA_FLAGS")
+        else:
+            os.environ["XLA_FLAGS"] = old
+    with pool:
+        out = {"shard": (tmp / "two.zarr", shard.result())}
+        if importlib.util.find_spec("ray") is not None:  # found, not imported (docstring)
+            out["ray"] = (tmp / "ray.zarr", pool.submit(_case, "sweep_on_ray_killing_a_worker", PARAMS,
+                                                        str(tmp / "ray.zarr"), KW, str(ROOT)).result())
     assert "ray" not in sys.modules  # the pytest worker stayed free of Ray
+    return out
+
+
+def _case(name, *args):
+    """In the spawned child: a case of tests/sweep_ray_case.py."""
+    import tests.sweep_ray_case as cases
+    return getattr(cases, name)(*args)
+
+
+def test_ray_equals_local_with_a_worker_killed(spawned, local_store):
+    """Every member comes back exactly once and equals the local backend."""
+    if "ray" not in spawned:
+        pytest.skip("ray is not installed (it is in the test extra)")
+    _, local, _, _ = local_store
+    out, (seen, killed) = spawned["ray"]
     assert killed, "no chunk was running when the first one finished"
     assert sorted(seen) == list(range(6))  # every member came back exactly once
     ds = xr.open_zarr(out).load()
@@ -211,24 +238,12 @@ def test_ray_equals_local_with_a_worker_killed(local_store, tmp_path):
     assert run["backend"] == "ray" and run["cpus"] == 2.0
 
 
-def _ray_case(*args):
-    """In the spawned child: the Ray sweep of tests/sweep_ray_case.py."""
-    import tests.sweep_ray_case as case
-    return case.sweep_on_ray_killing_a_worker(*args)
-
-
-# ---------------------------------------------------------------------------- devices
-def test_local_backend_shards_across_host_devices(local_store, tmp_path):
-    """Two CPU host devices (XLA flag, a fresh process): each chunk is one program
-    sharded across both; the numbers equal the one-device store."""
+def test_local_backend_shards_across_host_devices(spawned, local_store):
+    """Two CPU host devices: each chunk is one program sharded across both; the numbers
+    equal the one-device store."""
     _, local, _, _ = local_store
-    out = tmp_path / "two.zarr"
-    code = (f"from ancf_jax.sweep import run_sweep\n"
-            f"run_sweep('m1', {PARAMS!r}, out={str(out)!r}, design='grid', levels=2, "
-            f"overrides={BASE!r}, chunk_size=2, progress=False)\n")
-    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=2",
-               PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
-    subprocess.run([sys.executable, "-c", code], check=True, env=env, cwd=ROOT, timeout=600)
+    out, devices = spawned["shard"]
+    assert len(devices) == 2
     ds = xr.open_zarr(out)
     assert json.loads(ds.attrs["runs"])[0]["devices"] == ["cpu:0", "cpu:1"]
     for name in ("tip_x", "tip_y", "sigma_e1_mid"):
