@@ -1,6 +1,6 @@
 """Agreement check before timing: the same models in both codes, identical settings.
 
-M1 (6, 12, 24 elements), M2 (12, 18, 24) and the flexible pendulum H1 (MODELS.md; the
+M1 (6, 12, 24 elements), M2 (12, 18, 24) and the flexible pendulum H1 (docs/models.md; the
 parameters of ``flexible_pendulum.toml`` with Exudyn's formulation instead of the
 file's Green–Lagrange strain), each built from one ancf_jax system and translated to
 Exudyn, integrated by both with index-3 generalized-α (ρ∞ = 0.9, h = 1 ms, full Newton,

@@ -80,7 +80,7 @@ def _m2_text() -> str:
         else:
             text += ("So the mesh sequence converges, but the paper's conclusion is not reproduced "
                      "in the form \"18 and 24 agree closely\": with the model as defined in "
-                     "MODELS.md, 18 elements are about as far from 24 as 12 are, and the "
+                     "[the reference models](models.md), 18 elements are about as far from 24 as 12 are, and the "
                      "trajectory settles only from 24 elements on. ")
     if steps:
         text += (f"The step is not the cause: at 24 elements the largest step tried differs by "

@@ -79,7 +79,7 @@ EXUDYN_RULES = {
     2: (("lobatto", 3), ("gauss", 2)),
 }
 
-#: H1, the very flexible pendulum (MODELS.md), SI. No ancf_jax builder exists yet, so
+#: H1, the very flexible pendulum (docs/models.md), SI. No ancf_jax builder exists yet, so
 #: the parameters live here (the lead may move them to ``ancf_jax.models``).
 H1 = dict(length=1.2, n_elements=8, area=0.0018, second_moment=1.215e-8, density=5540.0,
           youngs_modulus=0.7e6, gravity=9.81)

@@ -5,7 +5,7 @@ being generalized-α with full Newton at a very fine step (its own error estimat
 against twice that step). Work: run time of the compiled run (compile time reported
 separately; one compilation per solver and tolerance). Fixed-step solvers sweep the
 step, adaptive ones the tolerance (atol = rtol / 100). The span is short because the
-explicit solvers need microsecond steps on this stiff wire (MODELS.md).
+explicit solvers need microsecond steps on this stiff wire (docs/models.md).
 
     python -m benchmarks.work_precision [--quick]
 """

@@ -17,7 +17,7 @@
 # # 03 — Paper example 2 (model M2): bodies sliding on a catenary cable
 #
 # §4.3 of Seo, Jung & Park (Table 2, Figs. 11–13), in the project's interpretation
-# (`MODELS.md`): a 4.02 m steel cable (d = 3 mm, 0.148 kg) pinned at A = (0, 0) and
+# (`docs/models.md`): a 4.02 m steel cable (d = 3 mm, 0.148 kg) pinned at A = (0, 0) and
 # B = (3.8, 0); a trolley RB1 whose centre slides on the cable without friction
 # (sliding joint, Eqs. 19–21) and a cabin RB2 hanging 0.5 m below it on a revolute
 # joint; α = 0.01 on the cable. The initial state is the static equilibrium with the
@@ -50,7 +50,7 @@ from ancf_jax.simulation import simulate_batch
 warnings.filterwarnings("ignore", message="IProgress not found")  # tqdm without ipywidgets
 
 QUICK = os.environ.get("ANCF_JAX_QUICK", "0") == "1"
-T_END = 0.6 if QUICK else RUN["t_end"]        # MODELS.md: 3 s
+T_END = 0.6 if QUICK else RUN["t_end"]        # docs/models.md: 3 s
 COUNTS = (8, 12) if QUICK else (12, 18, 24)   # the paper's Fig. 13 meshes
 print({k: M2[k] for k in ("length", "span", "cable_mass", "trolley_mass", "cabin_mass", "hanger", "s0", "alpha")})
 print("solver:", RUN["solver"], RUN["solver_options"], "dt =", RUN["dt"], "s")

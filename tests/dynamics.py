@@ -76,7 +76,7 @@ def observed_orders(errors):
 
 # ---------------------------------------------------------------------------- models
 def h1_model(n_elements=4, *, alpha=0.0, beta=0.0, youngs_modulus=0.7e6):
-    """H1 (MODELS.md): very flexible pendulum, 1.2 m, pinned at the origin, gravity only."""
+    """H1 (docs/models.md): very flexible pendulum, 1.2 m, pinned at the origin, gravity only."""
     m = Model(gravity=(0.0, -G))
     area = 0.0018
     section = Section(youngs_modulus, area, 1.215e-8, 5540.0 * area)

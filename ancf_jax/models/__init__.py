@@ -1,4 +1,4 @@
-"""Ready-made models of the paper (defined exactly in MODELS.md): M1, M2, H1."""
+"""Ready-made models of the paper (defined exactly in docs/models.md): M1, M2, H1."""
 
 from .m1 import m1_model
 from .m2 import m2_model

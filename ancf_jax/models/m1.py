@@ -13,7 +13,7 @@ from ..model import Model, node
 from ..outputs import Output
 from ..section import Section
 
-#: parameters of M1 (SI), as in MODELS.md
+#: parameters of M1 (SI), as in docs/models.md
 M1 = dict(length=0.402, n_elements=6, diameter=1e-3, area=7.854e-7, second_moment=4.909e-14,
           youngs_modulus=200e9, beam_mass=0.0025, tip_mass=0.02, tip_inertia=1.58e-6,
           alpha=0.02, beta=0.0, gravity=9.81)
@@ -29,7 +29,7 @@ OUTPUTS = (
            fibre=STRESS_FIBRE, measure="exact"),
 )
 
-#: default run settings (MODELS.md: t in [0, 2] s; outputs every 1 ms)
+#: default run settings (docs/models.md: t in [0, 2] s; outputs every 1 ms)
 RUN = dict(t_end=2.0, dt=1e-3, output_dt=1e-3, solver="generalized-alpha", solver_options={})
 
 

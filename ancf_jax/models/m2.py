@@ -1,5 +1,5 @@
 """Model M2: a multibody system sliding on a catenary cable (paper §4.3, Table 2,
-Figs. 11–13), in the project's fixed interpretation (MODELS.md).
+Figs. 11–13), in the project's fixed interpretation (docs/models.md).
 
 A 4.02 m steel cable (d = 3 mm, 0.148 kg) pinned at A = (0, 0) and B = (3.8, 0); a
 trolley RB1 whose centre slides on the cable (sliding joint, no friction) and a cabin
@@ -19,7 +19,7 @@ from ..model import Model, body_point, build_in_equilibrium, node
 from ..outputs import Output
 from ..section import Section
 
-#: parameters of M2 (SI), as in MODELS.md; I as printed in Table 2; ``height`` lifts
+#: parameters of M2 (SI), as in docs/models.md; I as printed in Table 2; ``height`` lifts
 #: support B to (span, height) (0 in M2)
 M2 = dict(length=4.02, span=3.8, height=0.0, n_elements=24, diameter=3e-3, area=7.068e-6,
           second_moment=7.952e-12, youngs_modulus=200e9, cable_mass=0.148,
@@ -37,7 +37,7 @@ OUTPUTS = (
     Output("rb2_y", "body", "cabin", "y"),
 )
 
-#: default run settings (MODELS.md: t in [0, 3] s). The release sends an axial shock
+#: default run settings (docs/models.md: t in [0, 3] s). The release sends an axial shock
 #: through the light, stiff cable; generalized-α with ρ∞ = 0.5 damps it at h = 1 ms.
 RUN = dict(t_end=3.0, dt=1e-3, output_dt=1e-2, solver="generalized-alpha",
            solver_options=dict(rho_inf=0.5, max_iterations=30))

@@ -1,5 +1,5 @@
 """The integrators (RK4, generalized-α, and diffrax's Tsit5, Dopri5, Kvaerno5) on common
-problems: the very flexible pendulum H1 (MODELS.md, 4 elements) over t ∈ [0, 0.5] s
+problems: the very flexible pendulum H1 (docs/models.md, 4 elements) over t ∈ [0, 0.5] s
 and a rigid pendulum swinging ±143°.
 
 Shown: each method's convergence order in the step size (RK4 4, generalized-α 2, the
