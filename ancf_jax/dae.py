@@ -152,7 +152,7 @@ PROJECTION_NEWTON = ModifiedNewton(tolerance=1e-12, max_iterations=4, contractio
 
 
 def project_position(system: System, q, t, *, chain_factor=None,
-                     root_finder: ModifiedNewton = PROJECTION_NEWTON):
+                     root_finder: ModifiedNewton = PROJECTION_NEWTON, implicit: bool = True):
     """Project q onto Φ(q, t) = 0 in the mass metric (``chain_factor``: the constant
     beam mass's factors, reused in every iteration): the nearest point
     argmin ½ |p − q|²_M subject to Φ(p, t) = 0, as the root of its optimality conditions
@@ -161,7 +161,9 @@ def project_position(system: System, q, t, *, chain_factor=None,
 
     by ``root_finder`` on the matrix [[M, Φ_pᵀ], [Φ_p, 0]] (the curvature term μ·Φ_pp
     is left out: μ vanishes at the solution when q is on the manifold, and it is of
-    the size of the drift otherwise). Differentiated implicitly."""
+    the size of the drift otherwise). Differentiated implicitly when ``implicit``
+    (otherwise the iterations are not meant to be differentiated, and nothing of the
+    implicit derivative is traced)."""
     if not system.n_constraints:
         return q
     n = system.n_coordinates
@@ -176,7 +178,7 @@ def project_position(system: System, q, t, *, chain_factor=None,
         return mass_saddle_matrix(system, system.constraint_jacobian(p, t))
 
     y0 = to_solver_order(system, q, jnp.zeros(system.n_constraints, q.dtype))
-    sol = root_finder.root(residual, linearize, y0, size=n, chain_factor=chain_factor)
+    sol = root_finder.root(residual, linearize, y0, size=n, chain_factor=chain_factor, implicit=implicit)
     return from_solver_order(system, sol.x)[0]
 
 

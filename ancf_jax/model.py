@@ -24,10 +24,12 @@ import dataclasses
 import warnings
 from typing import Any, Callable, Optional
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from . import dae
 from . import joints as J
 from . import points as P
 from .beam import Beam
@@ -36,6 +38,7 @@ from .element.strain_energy import Formulation
 from .errors import ConstraintError, ModelError, VelocityProjectionWarning
 from .forces import PointForce, PointTorque, SpringDamper
 from .mesh import BeamMesh, pad
+from .newton import ModifiedNewton
 from .section import Section
 from .system import State, System
 from .validation import (check_choice, check_finite, check_nonnegative, check_positive,
@@ -553,6 +556,18 @@ _JACOBIAN = jax.jit(lambda sys, q, t: sys.constraint_jacobian(q, t))
 _TIME_DERIVATIVE = jax.jit(lambda sys, q, t: sys.constraint_time_derivative(q, t))
 
 
+#: root finder of the initial position projection (:func:`assemble_state`): full
+#: Newton (Φ_q refreshed at every iteration) on the optimality conditions of the
+#: nearest consistent configuration, to corrections of 1e-12 m
+ASSEMBLY_NEWTON = ModifiedNewton(tolerance=1e-12, max_iterations=50, contraction=0.0)
+
+
+@eqx.filter_jit
+def _project_position(system, q, t, root_finder):
+    return dae.project_position(system, q, t, chain_factor=dae.mass_chain_factor(system),
+                                root_finder=root_finder, implicit=False)
+
+
 def _jitted(system):
     return _CONSTRAINT, _JACOBIAN, _TIME_DERIVATIVE
 
@@ -777,16 +792,21 @@ def project_velocities(system: System, q, v, t=0.0, *, given=None,
 
 
 def assemble_state(system: System, state: State, *, tolerance: float = 1e-10,
-                   max_iterations: int = 50, given=None, warn_tolerance: float = 1e-6) -> State:
-    """Project an initial state onto Φ(q, t) = 0 (minimum-norm position correction,
-    after checking the rank of Φ_q) and then its velocities onto Φ̇ = 0 by the
-    kinetic-energy projection of :func:`project_velocities`.
+                   given=None, warn_tolerance: float = 1e-6) -> State:
+    """Project an initial state onto Φ(q, t) = 0 and then its velocities onto Φ̇ = 0.
+
+    Positions (after checking the rank of Φ_q): where max|Φ| exceeds ``tolerance``,
+    the nearest configuration on the joints in the mass metric,
+    argmin ½ |p − q|²_M subject to Φ(p, t) = 0 (:func:`ancf_jax.dae.project_position`,
+    by the root finder of the time steps, :data:`ASSEMBLY_NEWTON`); padding
+    coordinates do not move. Velocities: the kinetic-energy projection of
+    :func:`project_velocities`.
 
     Args:
         system: the assembled system.
         state: the initial state as given.
-        tolerance: constraint residual accepted without position projection [m].
-        max_iterations: Newton iterations of the position projection.
+        tolerance: constraint residual max|Φ| accepted without position projection,
+            and required after it [m or rad].
         given: which velocities were given, shape (n,) bool (default all; see
             :meth:`Model.given_velocities`).
         warn_tolerance: relative change of a given velocity that is warned about
@@ -803,25 +823,18 @@ def assemble_state(system: System, state: State, *, tolerance: float = 1e-10,
     check_constraint_rank(system, q, t)
     if system.n_constraints == 0:
         return state
-    owners = system.constraint_owner()
-    free = ~np.asarray(system.inactive_mask())
-    for _ in range(max_iterations):
+    phi = np.asarray(phi_fn(system, jnp.asarray(q), t))
+    if not np.max(np.abs(phi)) <= tolerance:
+        q = np.array(_project_position(system, jnp.asarray(q), t, ASSEMBLY_NEWTON))
         phi = np.asarray(phi_fn(system, jnp.asarray(q), t))
-        if np.max(np.abs(phi)) <= tolerance:
-            break
-        jac = np.asarray(jac_fn(system, jnp.asarray(q), t))[:, free]
-        dq = np.linalg.lstsq(jac, -phi, rcond=None)[0]
-        q[free] += dq
-    else:
-        phi = np.asarray(phi_fn(system, jnp.asarray(q), t))
-        worst = np.argsort(-np.abs(phi))[:4]
-        names = sorted({owners[i] for i in worst if abs(phi[i]) > tolerance}, key=owners.index)
+    if not (np.all(np.isfinite(q)) and np.max(np.abs(phi)) <= tolerance):
+        owners = system.constraint_owner()
+        bad = np.where(np.isfinite(phi), np.abs(phi), np.inf)
+        worst = np.argsort(-bad)[:4]
+        names = sorted({owners[i] for i in worst if bad[i] > tolerance}, key=owners.index)
         raise ConstraintError(
             f"conflicting constraints: the joints cannot all be satisfied (largest residual "
-            f"{np.max(np.abs(phi)):.3g}); joints involved: {', '.join(names)}")
-    phi = np.asarray(phi_fn(system, jnp.asarray(q), t))
-    if not np.all(np.isfinite(phi)) or np.max(np.abs(phi)) > 1e3 * tolerance + 1e-9:
-        raise ConstraintError("conflicting constraints: projection did not converge")
+            f"{np.max(bad):.3g}); joints involved: {', '.join(names)}")
     check_constraint_rank(system, q, t)
     v = project_velocities(system, q, state.v, t, given=given, warn_tolerance=warn_tolerance)
     return State(jnp.asarray(q), jnp.asarray(v), state.t)
