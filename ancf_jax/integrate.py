@@ -25,7 +25,10 @@ split: the crossing fraction θ is found by regula falsi (Illinois) on
 θ ↦ s(step(θ h)) − s_node, the step is taken to just past the node and then
 completed. (Crossing location and step retries are solver internals written as while
 loops; gradients by reverse mode need both off, which is the default of
-:func:`ancf_jax.simulation.trajectory`.)
+:func:`ancf_jax.simulation.trajectory`.) The crossing search is written here rather
+than taken from optimistix: its only bracketing root finder is bisection, which gains
+one bit per iteration, and every iteration is a full implicit step; Illinois reaches
+the node to a fraction 1e-9 of an element in ~6.
 """
 
 from __future__ import annotations

@@ -31,6 +31,13 @@ Stopping rule (first that holds, per member):
 
 Batches (several data sets and/or several initial guesses) evaluate all members in one
 ``vmap``-ed program per iteration; each member keeps its own damping and stopping state.
+
+Why this loop is not optimistix's ``LevenbergMarquardt``: that solver has no bounds (the
+floor and active-bound hold above are what lets β fitted to β = 0 data converge), and
+its stopping rule is a step/residual tolerance; this one needs MINPACK's gradient test,
+the zero-residual and noise-floor rules, a progress line per iteration, and a host loop
+whose iterations are single vmapped simulations with their forward-mode Jacobians (the
+expensive part, compiled once). The linear algebra of a step is a few-by-few solve.
 """
 
 from __future__ import annotations
