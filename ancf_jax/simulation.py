@@ -474,6 +474,18 @@ def _simulate_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunk
     return res
 
 
+def harmonize_rate_stiffness(systems):
+    """Systems built with β = 0 and β ≠ 0 differ in a static switch of their beams
+    (:attr:`~ancf_jax.beam.Beam.rate_stiffness`, the Newton matrix's β-rate term): set
+    it on for every member where it is on for one, so that they batch."""
+    systems = list(systems)
+    counts = {len(s.beams) for s in systems}
+    if len(systems) < 2 or len(counts) != 1:
+        return systems
+    flags = [any(s.beams[i].rate_stiffness for s in systems) for i in range(counts.pop())]
+    return [s.with_rate_stiffness(flags) for s in systems]
+
+
 def stack(trees):
     """Stack pytrees of identical structure (systems, states) along a new leading axis."""
     return jax.tree.map(lambda *xs: jnp.stack(xs), *trees)
@@ -515,6 +527,7 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
     systems, states = list(systems), list(states)
     if not systems or len(systems) != len(states):
         raise ModelError("simulate_batch needs equally many systems and states (at least one)")
+    systems = harmonize_rate_stiffness(systems)
     treedefs = {jax.tree.structure(s) for s in systems}
     if len(treedefs) != 1 or len({tuple(np.shape(x) for x in jax.tree.leaves(s)) for s in systems}) != 1:
         raise ModelError("simulate_batch needs systems of identical structure and shapes: build them "

@@ -140,6 +140,13 @@ class System(eqx.Module):
         return jnp.concatenate(parts)
 
     # ------------------------------------------------------------------ inertia
+    def with_rate_stiffness(self, on=True) -> "System":
+        """The system with every beam's static :attr:`~ancf_jax.beam.Beam.rate_stiffness`
+        set to ``on`` (a bool, or one per beam)."""
+        flags = [on] * len(self.beams) if isinstance(on, bool) else list(on)
+        beams = tuple(b.with_rate_stiffness(f) for b, f in zip(self.beams, flags))
+        return eqx.tree_at(lambda s: s.beams, self, beams) if self.beams else self
+
     def beam_mass(self) -> BlockTridiagonal:
         """Mass matrix of the beam chain (block tridiagonal, dummy unit mass on padding)."""
         return BlockTridiagonal.concatenate([b.mass() for b in self.beams])

@@ -94,12 +94,23 @@ def perturbed(system, state, seed):
     return q, v, lam
 
 
-@pytest.mark.parametrize("case", ["m1_beta", "m2", "m1_forces"])
+def beta_set_after_build():
+    """M1 built with β = 0 (its β-rate switch off), then β = 2e-4 s set as the
+    identification sets a fitted β."""
+    from ancf_jax.identification.parameters import Parameter
+    system, state = m1_model().build()
+    assert not system.beams[0].rate_stiffness
+    return Parameter("beta", "beta", "beam", 0).set(system, 2e-4), state
+
+
+@pytest.mark.parametrize("case", ["m1_beta", "m1_beta_set", "m2", "m1_forces"])
 def test_iteration_matrix_is_the_jacobian_of_the_residual(case):
     if case == "m2":
         system, state, _ = m2_initial(n_elements=12)
     elif case == "m1_beta":
         system, state = m1_model(beta=2e-4).build()
+    elif case == "m1_beta_set":
+        system, state = beta_set_after_build()
     else:
         system, state = spring_system()
     q, v, lam = perturbed(system, state, 0)
@@ -112,6 +123,29 @@ def test_iteration_matrix_is_the_jacobian_of_the_residual(case):
     scale = jnp.max(jnp.abs(reference))
     assert structured.shape == reference.shape
     np.testing.assert_allclose(structured / scale, reference / scale, rtol=0, atol=1e-13)
+
+
+def test_rate_stiffness_switch():
+    """The β-rate term β ∂(K ė)/∂e is a static switch of each beam: on where β ≠ 0 at
+    construction or β is set by the identification; off, the element tangent is
+    K (1 + γ' β) and differs from the exact one by that term (so the exact matrix
+    really holds it). Systems with the switch on and off batch together (set on for
+    all), and a sweep over β does not count it as a change of shape."""
+    from ancf_jax.simulation import harmonize_rate_stiffness
+    from ancf_jax.sweep.runner import _signature
+    system, state = beta_set_after_build()
+    assert system.beams[0].rate_stiffness
+    beam = system.beams[0]
+    nodes = system.beam_nodes(state.q, 0) + 1e-2
+    vel = jnp.ones_like(nodes)
+    exact = beam.element_tangent(nodes, vel, 1.1e3)
+    off = beam.with_rate_stiffness(False).element_tangent(nodes, vel, 1.1e3)
+    np.testing.assert_allclose(off, beam.element_stiffness(nodes) * (1 + 1.1e3 * 2e-4), rtol=1e-14)
+    assert float(jnp.max(jnp.abs(exact - off))) > 1e-6 * float(jnp.max(jnp.abs(exact)))
+    zero, _ = m1_model().build()
+    a, b = harmonize_rate_stiffness([zero, system])
+    assert jax.tree.structure(a) == jax.tree.structure(b) and a.beams[0].rate_stiffness
+    assert _signature(zero, state) == _signature(system, state)
 
 
 def test_low_rank_border_solves_like_dense():

@@ -71,6 +71,8 @@ class Parameter:
         if self.kind == "alpha":
             return eqx.tree_at(lambda s: s.beams[k].alpha, system, value)
         if self.kind == "beta":
+            # the Newton matrix's β-rate term is static: on for a fitted β (it may start at 0)
+            system = eqx.tree_at(lambda s: s.beams[k], system, system.beams[k].with_rate_stiffness())
             return eqx.tree_at(lambda s: s.beams[k].beta, system, value)
         if self.kind == "E":
             return eqx.tree_at(lambda s: s.beams[k].section.youngs_modulus, system, value)

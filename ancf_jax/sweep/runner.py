@@ -102,7 +102,9 @@ class Plan:
 
 def _signature(system, state):
     import jax
-    leaves, treedef = jax.tree.flatten((system, state))
+    # the beams' static β-rate switch differs between β = 0 and β != 0 members; the
+    # batch sets it on for all (simulate_batch), so it is not part of the shape
+    leaves, treedef = jax.tree.flatten((system.with_rate_stiffness(True), state))
     return treedef, tuple(np.shape(x) for x in leaves)
 
 
