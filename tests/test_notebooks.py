@@ -15,11 +15,29 @@ NOTEBOOKS = ROOT / "notebooks"
 SCRIPTS = sorted(NOTEBOOKS.glob("[0-9][0-9]_*.py"))
 IDS = [p.stem for p in SCRIPTS]
 
-jupytext = pytest.importorskip("jupytext", reason="needs the test extra (jupytext)")
+# jupytext imports jupyter_client and so pyzmq: it is used only in child interpreters
+# (see _EXECUTE), the worker reads notebooks with nbformat
+if __import__("importlib").util.find_spec("jupytext") is None:  # found, not imported
+    pytest.skip("needs the test extra (jupytext)", allow_module_level=True)
+nbformat = pytest.importorskip("nbformat", reason="needs the test extra (nbformat)")
+
+#: prints the cells of a paired script, as jupytext reads it, as JSON
+_SCRIPT_CELLS = """
+import json, sys
+import jupytext
+print(json.dumps([[c.cell_type, c.source.strip()] for c in jupytext.read(sys.argv[1]).cells]))
+"""
+
+
+def _child(code, *args, timeout=1200):
+    import subprocess
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
+    return subprocess.run([sys.executable, "-c", code, *map(str, args)], env=env, capture_output=True,
+                          text=True, timeout=timeout)
 
 
 def _cells(nb):
-    return [(c.cell_type, c.source.strip()) for c in nb.cells]
+    return [[c.cell_type, c.source.strip()] for c in nb.cells]
 
 
 def test_every_notebook_has_a_script_and_a_notebook():
@@ -31,36 +49,61 @@ def test_every_notebook_has_a_script_and_a_notebook():
 @pytest.mark.parametrize("script", SCRIPTS, ids=IDS)
 def test_notebook_matches_its_script(script):
     """The .ipynb has the cells of the .py, in order (run ``jupytext --sync`` after editing)."""
-    py = jupytext.read(script)
-    ipynb = jupytext.read(script.with_suffix(".ipynb"))
-    assert _cells(ipynb) == _cells(py), f"{script.name} and its .ipynb differ: run jupytext --sync {script}"
+    import json
+    proc = _child(_SCRIPT_CELLS, script, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    ipynb = nbformat.read(script.with_suffix(".ipynb"), as_version=4)
+    assert _cells(ipynb) == json.loads(proc.stdout), \
+        f"{script.name} and its .ipynb differ: run jupytext --sync {script}"
     assert all(not c.get("outputs") for c in ipynb.cells if c.cell_type == "code"), \
         f"{script.with_suffix('.ipynb').name} is committed with outputs; clear them"
 
 
+#: executes one notebook in a fresh kernel and writes the executed copy; run in a child
+#: interpreter so that Jupyter's client (pyzmq and tornado, with their native I/O
+#: threads) never loads into the xdist worker, whose later XLA executable
+#: serializations crashed in workers holding such libraries (see tests/test_sweep.py)
+_EXECUTE = """
+import sys
+import jupytext, nbclient, nbformat
+script, work, out = sys.argv[1:4]
+nb = jupytext.read(script)
+client = nbclient.NotebookClient(nb, timeout=900, kernel_name="python3",
+                                 resources={"metadata": {"path": work}})
+try:
+    client.execute()
+except nbclient.exceptions.CellExecutionError as err:
+    print(err, file=sys.stderr)
+    sys.exit(3)
+finally:
+    nbformat.write(nb, out)
+"""
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("script", SCRIPTS, ids=IDS)
-def test_notebook_runs_in_quick_mode(script, tmp_path, monkeypatch):
+def test_notebook_runs_in_quick_mode(script, tmp_path):
     """Execute the notebook in a fresh kernel (its directory as working directory); a
     cell error fails the test with the cell and the traceback."""
-    nbclient = pytest.importorskip("nbclient", reason="needs the test extra (nbclient, ipykernel)")
-    pytest.importorskip("ipykernel", reason="needs the test extra (ipykernel)")
-    monkeypatch.setenv("ANCF_JAX_QUICK", "1")
-    monkeypatch.delenv("MPLBACKEND", raising=False)  # the kernel's inline backend renders the figures
+    from importlib.util import find_spec  # found, not imported (see _EXECUTE)
+
+    if find_spec("nbclient") is None or find_spec("ipykernel") is None:
+        pytest.skip("needs the test extra (nbclient, ipykernel)")
+    env = dict(os.environ, ANCF_JAX_QUICK="1")
+    env.pop("MPLBACKEND", None)  # the kernel's inline backend renders the figures
     # the kernel imports this checkout of ancf_jax, whatever is installed
-    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
-    nb = jupytext.read(script)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])
     work = tmp_path / "notebooks"
     work.mkdir()
-    client = nbclient.NotebookClient(nb, timeout=900, kernel_name="python3",
-                                     resources={"metadata": {"path": str(work)}})
-    try:
-        client.execute()  # the kernel runs the interpreter of this test session
-    except nbclient.exceptions.CellExecutionError as err:
-        pytest.fail(f"{script.name}: a cell failed\n{err}", pytrace=False)
-    finally:
-        import nbformat
-        nbformat.write(nb, tmp_path / script.with_suffix(".ipynb").name)  # executed copy, for debugging
+    executed = tmp_path / script.with_suffix(".ipynb").name  # executed copy, for debugging
+    import subprocess
+    proc = subprocess.run([sys.executable, "-c", _EXECUTE, str(script), str(work), str(executed)],
+                          env=env, capture_output=True, text=True, timeout=1200)
+    if proc.returncode == 3:
+        pytest.fail(f"{script.name}: a cell failed\n{proc.stderr[-6000:]}", pytrace=False)
+    assert proc.returncode == 0, proc.stderr[-6000:]
+    assert "zmq" not in sys.modules, "the Jupyter client was loaded into the pytest worker"
+    nb = nbformat.read(executed, as_version=4)
     outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])]
     assert not [o for o in outputs if o.get("output_type") == "error"]
     figures = [o for o in outputs if "image/png" in o.get("data", {})]
