@@ -168,6 +168,11 @@ def build_parser() -> argparse.ArgumentParser:
     fatigue.add_argument("--out", type=Path, default=None, help="output directory (default results/MODEL-fatigue)")
     fatigue.add_argument("--max-steps", type=_positive_int, default=None,
                          help=f"the most time steps accepted (default {MAX_STEPS:.0e})")
+    fatigue.add_argument("--study", action="append", default=[], metavar="PARAM=V1,V2,...",
+                         help="instead of one run: a vmapped study of Dirlik damage over these values of "
+                              "a parameter (alpha, beta, E, mass.BODY, optionally .BEAM; repeat for more "
+                              "parameters, equally many values each), with d(damage)/d(parameter) through "
+                              "the run; writes study.csv and study.json")
     fatigue.add_argument("--no-figures", action="store_true", help="skip the figures")
     fatigue.add_argument("--no-progress", action="store_true", help="no progress bar")
 
@@ -452,6 +457,8 @@ def _fatigue(args) -> int:
     if settings.t_start >= sc.solver.t_end:
         raise _UsageError(f"fatigue.t_start = {settings.t_start:g} s is not before solver.t_end = "
                           f"{sc.solver.t_end:g} s")
+    if args.study:
+        return _fatigue_study(args, base, sc, settings)
     kw = sc.solver.simulate_kwargs()
     kw.update(progress=False if args.no_progress else None, on_failure="return", max_steps=args.max_steps)
     out = _check_out(Path(args.out) if args.out is not None else Path("results") / f"{base.name}-fatigue")
@@ -477,6 +484,51 @@ def _fatigue(args) -> int:
         print(f"ancf-jax fatigue: {r.message} (damage of the run up to then is written)", file=sys.stderr)
         return 130 if r.status == "interrupted" else 1
     return 0
+
+
+def _fatigue_study(args, base, sc, settings) -> int:
+    """``ancf-jax fatigue MODEL --study PARAM=V1,V2,...`` (see the --study help)."""
+    import numpy as np
+
+    from .errors import ModelError
+    from .fatigue import study
+    from .identification.parameters import resolve
+    from .integrate import RunOptions
+    from .simulation import make_solver
+    names, columns = [], []
+    for item in args.study:
+        name, eq, text = item.partition("=")
+        try:
+            vals = [float(v) for v in text.split(",")] if eq and text.strip() else []
+        except ValueError:
+            vals = []
+        if not name.strip() or not vals or not all(math.isfinite(v) for v in vals):
+            raise _UsageError(f"--study {item!r}: expected PARAM=V1,V2,... with finite numbers")
+        names.append(name.strip())
+        columns.append(vals)
+    if len({len(c) for c in columns}) != 1:
+        raise _UsageError("--study: every parameter needs equally many values "
+                          f"(got {', '.join(f'{n}: {len(c)}' for n, c in zip(names, columns))})")
+    out = _check_out(Path(args.out) if args.out is not None else Path("results") / f"{base.name}-fatigue")
+    _check_size(args, {base.name: sc}, sc.solver)
+    system, state = sc.build()
+    try:
+        resolve(system, names)
+        solver = make_solver(sc.solver.solver, **dict(sc.solver.solver_options))
+        options = RunOptions(drift_tolerance=sc.solver.drift_tolerance,
+                             locate_crossings=sc.solver.locate_crossings)
+    except ModelError as e:
+        raise _UsageError(f"--study: {e}") from None
+    res = study(system, state, names, np.array(columns).T, settings, t_end=sc.solver.t_end,
+                dt=sc.solver.dt, output_dt=sc.solver.output_dt, solver=solver, options=options)
+    res.write(out)
+    for v, d, hs, g, c in zip(res.values, res.max_damage, res.hot_spot, res.max_damage_gradient(), res.status):
+        vals = ", ".join(f"{n} = {x:.6g}" for n, x in zip(res.names, v))
+        grads = ", ".join(f"dD/d{n} = {x:.3g}" for n, x in zip(res.names, g))
+        print(f"{base.name}: {vals}: max damage {d:.4g} per run (Dirlik) at {hs['beam']} s = {hs['s']:.4g} m; "
+              f"{grads}" + ("" if c == 0 else " (run failed: see study.csv)"))
+    print(f"-> {out}/study.csv, study.json")
+    return 0 if (res.status == 0).all() else 1
 
 
 def _sweep(args) -> int:

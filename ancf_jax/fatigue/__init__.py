@@ -8,9 +8,13 @@
 * :func:`dirlik_damage`, :func:`narrow_band_damage`: spectral damage in JAX (``jax.grad``).
 * :func:`fibre_stress`, :func:`stress_history`: σ = K_t (N/A ± E c κ) along beams.
 * :func:`analyse`: damage and life along every beam of a run; files and figures.
+* :func:`study`, :func:`damage_function`: damage as a differentiable function of model
+  parameters through the simulated run; vmapped studies with ∂D/∂p in one call.
 
 Layering: this package belongs to the analysis layer; it imports the element, beam,
-system and results modules, and nothing below imports it.
+system and results modules (and, for studies, the pure run of :mod:`ancf_jax.simulation`
+and the parameter names of :mod:`ancf_jax.identification.parameters`), and nothing
+below imports it.
 """
 
 from .analysis import (METHODS, Concentration, FatigueResult, FatigueSettings, analyse, settings_from_table,
@@ -21,9 +25,11 @@ from .sn import CORRECTIONS, SNCurve, equivalent_range
 from .spectral import (dirlik_coefficients, dirlik_damage, narrow_band_damage, rayleigh_damage,
                        spectral_moments, welch)
 from .stress import fibre_stress, points_along, points_at, stress_history
+from .study import StudyResult, damage_function, study
 
 __all__ = ["cycles", "reversals", "SNCurve", "equivalent_range", "CORRECTIONS", "miner",
            "rainflow_damage", "life", "welch", "spectral_moments", "dirlik_coefficients",
            "dirlik_damage", "narrow_band_damage", "rayleigh_damage", "fibre_stress", "points_along",
            "points_at", "stress_history", "analyse", "FatigueSettings", "FatigueResult",
-           "Concentration", "METHODS", "sinusoid_damage", "settings_from_table"]
+           "Concentration", "METHODS", "sinusoid_damage", "settings_from_table", "study", "damage_function",
+           "StudyResult"]

@@ -197,14 +197,22 @@ def _num(x):
     return x if math.isfinite(x) else None
 
 
-def _points(results: Results, st: FatigueSettings):
-    """{beam index: (element, xi, s, scf)} of every beam with points."""
-    system = results.system
+def _beam_index(system, name: str) -> int:
+    if name not in system.beam_names:
+        raise ModelError(f"no beam named {name!r} (known: {', '.join(map(repr, system.beam_names)) or 'none'})")
+    return system.beam_names.index(name)
+
+
+def assessed_points(system, st: FatigueSettings) -> dict:
+    """{beam index: (element, xi, s, scf)} of every beam with points to assess (the
+    settings' ``at`` points, else its layout along every beam), each an array of
+    shape (P_b,); s is the reference arc length [m], scf the factor K_t of each point."""
+    for c in st.concentrations:
+        _beam_index(system, c.beam)
     chosen: dict[int, list] = {}
     if st.at is not None:
         for name, s in st.at:
-            b = results._index(system.beam_names, name, "beam")
-            chosen.setdefault(b, []).append(float(s))
+            chosen.setdefault(_beam_index(system, name), []).append(float(s))
     out = {}
     for b, name in enumerate(system.beam_names):
         beam = system.beams[b]
@@ -219,44 +227,51 @@ def _points(results: Results, st: FatigueSettings):
             if c.beam == name:
                 scf = np.where((s >= c.s_min) & (s <= c.s_max), scf * c.factor, scf)
         out[b] = (k, xi, s, scf)
+    if not out:
+        raise ModelError("fatigue: no points to assess")
     return out
+
+
+def fibre_stresses(system, q, points: dict, st: FatigueSettings):
+    """Surface-fibre stresses of the ``points`` (:func:`assessed_points`) over the
+    rows of ``q`` (N, n): σ [Pa], shape (N, P, 2) (fibres +c, −c). Traceable."""
+    fibre = None if st.fibre is None else jnp.asarray(st.fibre, float)
+    return jnp.concatenate([stress_history(system, b, q, jnp.asarray(k), jnp.asarray(xi), fibre, st.measure,
+                                           jnp.asarray(scf)) for b, (k, xi, _, scf) in points.items()], axis=1)
+
+
+def dirlik_fibres(sigma, dt, st: FatigueSettings):
+    """Dirlik damage of every fibre of σ (N, P, 2) sampled every ``dt`` [s]: shape (P, 2).
+    Traceable and differentiable."""
+    n, p, _ = sigma.shape
+    series = jnp.reshape(sigma, (n, p * 2)).T
+    dmg = jax.vmap(lambda x: dirlik_damage(x, dt, st.curve, nperseg=st.nperseg, correction=st.correction,
+                                           ultimate_strength=st.ultimate_strength))(series)
+    return jnp.reshape(dmg, (p, 2))
 
 
 def analyse(results: Results, settings: FatigueSettings) -> FatigueResult:
     """Damage and life along the beams of a run (module docstring)."""
     st = settings
-    for c in st.concentrations:
-        results._index(results.system.beam_names, c.beam, "beam")
+    points = assessed_points(results.system, st)
     rows = np.asarray(results.t) >= st.t_start - 1e-12
     if rows.sum() < 3:
         raise ModelError(f"fatigue: fewer than 3 output rows at t >= t_start = {st.t_start:g} s")
     t = np.asarray(results.t)[rows]
-    q = jnp.asarray(results.q[rows])
-    names, ss, sigmas = [], [], []
-    for b, (k, xi, s, scf) in _points(results, st).items():
-        sig = np.asarray(stress_history(results.system, b, q, jnp.asarray(k), jnp.asarray(xi),
-                                        None if st.fibre is None else jnp.asarray(st.fibre, float),
-                                        st.measure, jnp.asarray(scf)))
-        names += [results.system.beam_names[b]] * len(s)
-        ss.append(s)
-        sigmas.append(sig)
-    if not sigmas:
-        raise ModelError("fatigue: no points to assess")
-    sigma = np.concatenate(sigmas, axis=1)
+    sigma = np.asarray(fibre_stresses(results.system, jnp.asarray(results.q[rows]), points, st))
+    names = [results.system.beam_names[b] for b, (_, _, s, _) in points.items() for _ in s]
+    ss = np.concatenate([s for (_, _, s, _) in points.values()])
     if not np.isfinite(sigma).all():
         raise ModelError("fatigue: the stress histories contain NaN or inf (a failed run?)")
     p = sigma.shape[1]
-    series = sigma.reshape(len(t), p * 2).T
     if st.method == "rainflow":
-        dmg = np.array([rainflow_damage(x, st.curve, st.correction, st.ultimate_strength) for x in series])
+        series = sigma.reshape(len(t), p * 2).T
+        dmg = np.array([rainflow_damage(x, st.curve, st.correction, st.ultimate_strength)
+                        for x in series]).reshape(p, 2)
     else:
         dt = float(np.mean(np.diff(t)))
-        fn = jax.jit(jax.vmap(lambda x: dirlik_damage(x, dt, st.curve, nperseg=st.nperseg,
-                                                      correction=st.correction,
-                                                      ultimate_strength=st.ultimate_strength)))
-        dmg = np.asarray(fn(jnp.asarray(series)))
-    return FatigueResult(st, np.array(names), np.concatenate(ss), dmg.reshape(p, 2), sigma, t,
-                         float(t[-1] - t[0]))
+        dmg = np.asarray(jax.jit(lambda x: dirlik_fibres(x, dt, st))(jnp.asarray(sigma)))
+    return FatigueResult(st, np.array(names), ss, dmg, sigma, t, float(t[-1] - t[0]))
 
 
 def settings_from_table(table) -> FatigueSettings:
