@@ -294,6 +294,10 @@ def test_cli_fatigue_end_to_end(tmp_path, capsys):
     i = int(np.argmax(data[:, 1]))
     assert info["max_damage"] == pytest.approx(data[i, 1], rel=1e-9)
     assert info["hot_spot"]["beam"] == "beam" and info["hot_spot"]["s"] == pytest.approx(data[i, 0])
+    # named after the nearest joint holding the beam (clamp at s = 0, tip joint at the end)
+    hs = info["hot_spot"]
+    joint, at = min((("clamp", 0.0), ("tip_joint", 0.402)), key=lambda j: abs(j[1] - hs["s"]))
+    assert hs["near"] == dict(joint=joint, distance_m=pytest.approx(abs(at - hs["s"])))
     assert info["life_hours"] == pytest.approx(0.001 / info["max_damage"], rel=1e-9)
     assert info["sn_curve"]["reference_range_pa"] == 160e6
     for name in ("cycles_hot_spot.png", "damage_along.png"):

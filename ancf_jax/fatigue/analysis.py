@@ -105,6 +105,8 @@ class FatigueResult:
         stress: surface-fibre stress histories [Pa], shape (N, P, 2).
         t: the output times used [s], shape (N,).
         duration: the span of ``t`` (last minus first time) [s].
+        attachments: {beam name: ((joint name, s [m], reach [m]), ...)}: where joints hold
+            each beam at a fixed arc length (:func:`attachments`), to name the hot spots.
     """
 
     settings: FatigueSettings
@@ -114,6 +116,16 @@ class FatigueResult:
     stress: np.ndarray
     t: np.ndarray
     duration: float
+    attachments: dict = dataclasses.field(default_factory=dict)
+
+    def near(self, beam: str, s: float) -> Optional[dict]:
+        """The joint holding ``beam`` closest to arc length ``s`` within
+        :data:`NEAR_ELEMENTS` element lengths: ``{"joint", "distance_m"}``, else None."""
+        joints = self.attachments.get(beam, ())
+        if not joints:
+            return None
+        name, at, reach = min(joints, key=lambda j: abs(j[1] - s))
+        return dict(joint=name, distance_m=abs(at - s)) if abs(at - s) <= reach else None
 
     @property
     def damage(self) -> np.ndarray:
@@ -142,7 +154,9 @@ class FatigueResult:
             if any(o["beam"] == self.beam[i] and abs(o["s"] - self.s[i]) < 1e-12 for o in out):
                 continue
             out.append(dict(beam=str(self.beam[i]), s=float(self.s[i]), damage=float(d[i]),
-                            life_repeats=_num(life(d[i])), fibre="+c" if self.damage_fibres[i, 0] >= self.damage_fibres[i, 1] else "-c"))
+                            life_repeats=_num(life(d[i])),
+                            fibre="+c" if self.damage_fibres[i, 0] >= self.damage_fibres[i, 1] else "-c",
+                            near=self.near(str(self.beam[i]), float(self.s[i]))))
         return out
 
     def summary(self) -> dict:
@@ -151,7 +165,8 @@ class FatigueResult:
         st = self.settings
         d = float(self.damage.max()) if self.damage.size else 0.0
         out = dict(max_damage=d, hot_spot=dict(beam=str(self.beam[p]), s=float(self.s[p]),
-                                               fibre="+c" if f == 0 else "-c"),
+                                               fibre="+c" if f == 0 else "-c",
+                                               near=self.near(str(self.beam[p]), float(self.s[p]))),
                    life_repeats=_num(life(d)), sn_curve=st.curve.to_dict(), method=st.method,
                    mean_stress_correction=st.correction, ultimate_strength_pa=st.ultimate_strength,
                    measure=st.measure, scf=st.scf, points=len(self.s), duration_s=self.duration,
@@ -160,7 +175,7 @@ class FatigueResult:
             out["life_hours"] = _num(life(d) * st.hours_per_run)
         if st.passes_per_run is not None:
             out["life_passes"] = _num(life(d) * st.passes_per_run)
-        out["units"] = dict(s="m", damage="-", life_repeats="repetitions of the simulated history",
+        out["units"] = dict(s="m", distance_m="m", damage="-", life_repeats="repetitions of the simulated history",
                             life_hours="h", life_passes="passes", duration_s="s", stress="Pa",
                             reference_range_pa="Pa", knee_range_pa="Pa", cutoff_range_pa="Pa")
         return out
@@ -201,6 +216,33 @@ def _beam_index(system, name: str) -> int:
     if name not in system.beam_names:
         raise ModelError(f"no beam named {name!r} (known: {', '.join(map(repr, system.beam_names)) or 'none'})")
     return system.beam_names.index(name)
+
+
+#: a hot spot is named after a joint at most this many element lengths away along the beam
+NEAR_ELEMENTS = 2.0
+
+
+def attachments(system) -> dict:
+    """{beam name: ((joint name, s [m], reach [m]), ...)}: the joints that hold a beam at
+    a fixed point (a node or an arc length: clamps, pins, fixed joints, prescribed
+    points; not sliding joints, which move), with the reach within which a hot spot is
+    named after them (:data:`NEAR_ELEMENTS` lengths of the element there)."""
+    from ..points import BeamNode, BeamPoint
+    out: dict = {}
+    for c in system.constraints:
+        for f in dataclasses.fields(c):
+            p = getattr(c, f.name)
+            if not isinstance(p, (BeamNode, BeamPoint)):
+                continue
+            mesh = system.beams[p.beam].mesh
+            if isinstance(p, BeamNode):
+                s = float(np.asarray(mesh.node_arc_lengths)[int(p.node)])
+            else:
+                s = float(p.s)
+            k, _ = mesh.locate(jnp.asarray(s))
+            reach = NEAR_ELEMENTS * float(np.asarray(mesh.element_lengths)[int(k)])
+            out.setdefault(system.beam_names[p.beam], []).append((c.name, s, reach))
+    return {b: tuple(v) for b, v in out.items()}
 
 
 def assessed_points(system, st: FatigueSettings) -> dict:
@@ -271,7 +313,8 @@ def analyse(results: Results, settings: FatigueSettings) -> FatigueResult:
     else:
         dt = float(np.mean(np.diff(t)))
         dmg = np.asarray(jax.jit(lambda x: dirlik_fibres(x, dt, st))(jnp.asarray(sigma)))
-    return FatigueResult(st, np.array(names), ss, dmg, sigma, t, float(t[-1] - t[0]))
+    return FatigueResult(st, np.array(names), ss, dmg, sigma, t, float(t[-1] - t[0]),
+                         attachments(results.system))
 
 
 def settings_from_table(table) -> FatigueSettings:

@@ -36,7 +36,9 @@ def damage_along(beam, s, damage_fibres, *, path=None, hot_spots=()):
             y = np.where(d[m][o, f] > 0, d[m][o, f], np.nan)
             ax.plot(np.asarray(s)[m][o], y, marker=".", ms=3, lw=1, label=f"{name} {label}")
     for h in hot_spots[:3]:
-        ax.annotate(f"{h['beam']} s={h['s']:.2f} m", (h["s"], h["damage"]), fontsize=7,
+        near = h.get("near")
+        where = f" (at {near['joint']})" if near else ""
+        ax.annotate(f"{h['beam']} s={h['s']:.2f} m{where}", (h["s"], h["damage"]), fontsize=7,
                     xytext=(4, 4), textcoords="offset points")
     ax.set_xlabel("arc length s [m]")
     ax.set_ylabel("damage per run [-]")
