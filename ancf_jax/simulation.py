@@ -36,6 +36,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from . import _memory
 from .errors import ModelError, SimulationError, SimulationInterrupted
 from .integrate import (DEFAULT_DT, DEFAULT_HALVINGS, LoopState, RunOptions, initial_loop, integrate_fixed,
                         segment_of, sliding_beams)
@@ -365,6 +366,7 @@ _chunk_batch = eqx.filter_jit(eqx.filter_vmap(
 
 
 _COMPILED: dict = {}
+_memory.register_cache(_COMPILED.clear)
 
 
 def _signature(args):
@@ -384,6 +386,8 @@ def compiled(fn, *args):
     hit = _COMPILED.get(key)
     if hit is not None:
         return hit, 0.0
+    # free programs before the process nears the kernel's memory-map limit (a crash in XLA)
+    _memory.relieve()
     t0 = time.perf_counter()
     exe = fn.lower(*args).compile()
     _COMPILED[key] = exe

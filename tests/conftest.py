@@ -43,3 +43,24 @@ if _TIMING_LOG:
         yield
         with open(_TIMING_LOG, "a") as f:
             f.write(f"{time.process_time() - c0:.2f} {time.perf_counter() - w0:.2f} {item.nodeid}\n")
+
+
+# Each compiled XLA:CPU program keeps its code in memory maps of its own (~1,500 for an
+# M1 chunk); a worker that keeps every program it compiled crashes inside XLA once it
+# reaches vm.max_map_count (65,530 by default): the random segfaults and aborts of
+# earlier CI runs, in compilation or executable serialization, late in a worker's life.
+# Programs are freed after a module when the worker holds over 30 % of the limit, and
+# during a module over 60 % (ancf_jax._memory; the library itself frees at 50 % before
+# compiling a simulation).
+@pytest.fixture(autouse=True, scope="module")
+def _free_programs_after_the_module():
+    yield
+    from ancf_jax import _memory
+    _memory.relieve(0.3)
+
+
+@pytest.fixture(autouse=True)
+def _free_programs_near_the_limit():
+    from ancf_jax import _memory
+    _memory.relieve(0.6)
+    yield
