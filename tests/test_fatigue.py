@@ -364,16 +364,18 @@ def test_cli_fatigue_study_writes_one_row_per_value(tmp_path, capsys):
     assert main(["fatigue", "m1", "--study", "gamma=1,2", "--out", str(out)]) == 2
     assert not out.exists()
     capsys.readouterr()
+    # the members, points and run of the API test above: the same program (persistent cache)
     rc = main(["fatigue", "m1", "--elements", "2", "--t-end", "0.2", "--out", str(out), "--study",
-               "alpha=0.3,0.6", "--set", "outputs.dt=0.002", "--set", 'fatigue.points.a={beam="beam", s=0.0}'])
+               "alpha=0.499,0.5,0.501", "--set", "outputs.dt=0.002",
+               "--set", 'fatigue.points.a={beam="beam", s=0.0}', "--set", 'fatigue.points.b={beam="beam", s=0.2}'])
     assert rc == 0, capsys.readouterr().err
     with open(out / "study.csv") as fh:
         rows = list(csv.DictReader(fh))
-    assert [float(r["alpha"]) for r in rows] == [0.3, 0.6]
+    assert [float(r["alpha"]) for r in rows] == [0.499, 0.5, 0.501]
     assert all(r["status"] == "ok" and r["hot_beam"] == "beam" and float(r["hot_s"]) == 0.0 for r in rows)
     d = np.array([float(r["max_damage"]) for r in rows])
     g = np.array([float(r["d_max_damage_d_alpha"]) for r in rows])
-    assert d[1] < d[0] and (g < 0).all()                    # more damping, less damage
+    assert d[2] < d[0] and (g < 0).all()                    # more damping, less damage
     info = json.loads((out / "study.json").read_text())
     assert info["parameters"] == ["alpha"] and info["method"] == "dirlik"
     np.testing.assert_allclose(info["max_damage"], d, rtol=1e-15)

@@ -139,8 +139,9 @@ def damage_function(system: System, state: State, parameters, settings: FatigueS
             ``max_halvings`` must be 0, a failed step freezes the member).
 
     Returns:
-        (f, names, beam, s): ``f(p)`` with p of shape (k,) returns ``(damage (P,), status)``;
-        ``beam`` and ``s`` [m] name the P points.
+        (f, names, beam, s): ``f(p)`` with p of shape (k,) returns ``(damage (P,), status)``
+        (``f(p, system, state)`` for another model of the same structure); ``beam`` and
+        ``s`` [m] name the P points.
 
     Raises:
         ModelError: unknown parameters, no points, fewer than 3 samples after ``t_start``.
@@ -171,8 +172,11 @@ def damage_function(system: System, state: State, parameters, settings: FatigueS
     beam = np.array([system.beam_names[b] for b, (_, _, s, _) in points.items() for _ in s])
     s = np.concatenate([s for (_, _, s, _) in points.values()])
 
-    def f(p):
-        sys, st = setter(system, state, jnp.asarray(p, float))
+    def f(p, sys0=system, st0=state):
+        # the model enters as arguments where the caller passes them (study does: the
+        # compiled program then does not hold it as constants and is shared between
+        # models of one structure, also through the persistent cache)
+        sys, st = setter(sys0, st0, jnp.asarray(p, float))
         seg, loop = trajectory(sys, st, solver, t_end=t_end, dt=dt, output_dt=output_dt, options=options)
         sigma = fibre_stresses(sys, seg.q[rows], points, settings)
         return jnp.max(dirlik_fibres(sigma, out_dt, settings), axis=1), loop.status
@@ -206,16 +210,17 @@ def study(system: System, state: State, parameters, values, settings: FatigueSet
     if not np.all(np.isfinite(values)):
         raise ModelError("values must be finite")
     if derivatives:
-        def member(p):
+        def member(p, sys, st):
             def g(x):
-                d, status = f(x)
+                d, status = f(x, sys, st)
                 return d, (d, status)
             jac, (d, status) = jax.jacfwd(g, has_aux=True)(p)
             return d, jac, status
     else:
-        def member(p):
-            d, status = f(p)
+        def member(p, sys, st):
+            d, status = f(p, sys, st)
             return d, None, status
-    d, jac, status = eqx.filter_jit(jax.vmap(member))(jnp.asarray(values))
+    d, jac, status = eqx.filter_jit(eqx.filter_vmap(member, in_axes=(0, None, None)))(jnp.asarray(values),
+                                                                                 system, state)
     return StudyResult(names, values, beam, s, np.asarray(d), None if jac is None else np.asarray(jac),
                        np.asarray(status))
