@@ -14,6 +14,8 @@ def rng():
 
 
 def pytest_configure(config):
+    if config.pluginmanager.hasplugin("xdist"):
+        config.pluginmanager.register(_Scheduler(), "ancf_jax_scheduler")
     os.environ.setdefault("ANCF_JAX_QUICK", "1")
     # One persistent compilation cache for the whole run: the xdist workers and the
     # subprocesses (CLI, notebooks) compile many identical programs (M1 and M2 appear
@@ -84,7 +86,11 @@ def pytest_collection_modifyitems(config, items):
     items.sort(key=rank)  # stable: the order within a module is kept
 
 
-if __import__("importlib").util.find_spec("xdist") is not None:  # the hook needs xdist
+class _Scheduler:
+    """Registered in pytest_configure only where xdist is active (a child pytest run with
+    ``-p no:xdist`` does not know the hook)."""
+
+    @staticmethod
     def pytest_xdist_make_scheduler(config, log):
         from xdist.scheduler import LoadScopeScheduling
 
