@@ -6,16 +6,13 @@ Solves, for load factors μ = 1/N, 2/N, …, 1,
 
 where Q holds the elastic forces (−∂U/∂q), μ·(gravity + applied loads) and the
 force elements, and λ are the Lagrange multipliers of the joints (clamps, pins,
-prescribed points, sliding joints, holds). The root finder is the one of the time
-integration (:class:`~ancf_jax.newton.ModifiedNewton`, here as full Newton with a
-retreat from non-finite residuals), and the Newton matrix the same structured
-linearization (:func:`ancf_jax.dae.iteration_matrix` at rest: tangent stiffness from
-the element energies including the geometric stiffness of the current stresses, the
-constraint Hessian λ·Φ_qq, and the force elements' local linearizations), so a static
-solve costs O(elements) per iteration like a time step.
+prescribed points, sliding joints, holds). The Newton matrix is the exact Jacobian
+of this residual by forward-mode autodiff (tangent stiffness including the geometric
+stiffness of the current stresses and the constraint Hessian λ·Φ_qq); a backtracking
+line search on the residual norm safeguards large deflections.
 
-The solver is written in JAX (``lax.scan`` over load steps, the root finder's
-``lax.while_loop`` for Newton), so it is jittable and vmappable; :func:`solve_static` is the host wrapper
+The solver is written in JAX (``lax.scan`` over load steps, ``lax.while_loop`` for
+Newton), so it is jittable and vmappable; :func:`solve_static` is the host wrapper
 that raises a :class:`~ancf_jax.errors.StaticsError` naming the failed load step.
 """
 
@@ -26,10 +23,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import dae
 from .errors import StaticsError
-from .linalg import AutoSaddleSolver
-from .newton import ModifiedNewton
 from .system import State, System
 from .validation import check_count, check_positive
 
@@ -84,76 +78,60 @@ def _solve(system: System, q0, lam0, t, load_factors, tolerance, max_iterations,
     n = q0.shape[0]
     fscale = _load_scale(system, q0, t)
     lscale = jnp.maximum(jnp.max(jnp.abs(q0)), 1.0)
-    inactive = system.inactive_mask()
-    chain = system.chain_slice()
-    zero_v = jnp.zeros_like(q0)
 
-    def residual(y, lf):
-        q, lam = dae.from_solver_order(system, y)
-        r, c = static_residual(system, q, lam, t, lf, q0)
-        return dae.to_solver_order(system, r, c)
+    def residual(x, lf):
+        r, c = static_residual(system, x[:n], x[n:] * fscale, t, lf, q0)
+        out = jnp.concatenate([r / fscale, c / lscale])
+        return out, out
 
-    def norm(r_s):
-        # the residual scaled by the largest external load (forces) and the model size
-        # (constraints)
-        r, c = dae.from_solver_order(system, r_s)
-        rc = jnp.max(jnp.abs(c)) / lscale if c.shape[0] else jnp.zeros(())
-        return jnp.maximum(jnp.max(jnp.abs(r)) / fscale, rc)
+    def newton(x0, lf):
+        # carry: accepted x, trial x, Newton step, step fraction, iteration, residual, done
+        # Full Newton steps: the residual of a slender beam may grow by orders of
+        # magnitude after the first (linear) step and still converge quadratically, so
+        # a monotone line search would stall; a step is halved only while the residual
+        # at the trial point is not finite.
+        def cond(c):
+            return (~c[6]) & (c[4] < max_iterations)
 
-    beam_mass = system.beam_mass() if system.chain_size else None
-    border_mass = system.border_mass_diagonal()
-    n_border = border_mass.shape[0]
-    m_max = jnp.maximum(jnp.max(jnp.diag(system.mass_matrix()) * ~inactive, initial=0.0), 1e-300)
+        def body(c):
+            x_acc, x_try, dx, a, it, _, _ = c
+            jac, r = jax.jacfwd(residual, has_aux=True)(x_try, lf)
+            jac = jac + reg
+            rn = jnp.max(jnp.abs(r))
+            finite = jnp.isfinite(rn)
+            step = jnp.where(it > 0, jnp.max(jnp.abs(a * dx[:n])), jnp.inf)
+            # converged when the scaled residual is below tolerance, or when the Newton
+            # correction is below 1e-10 of the model size: with quadratic convergence the
+            # error is then ~1e-20, and the residual is at its round-off floor (which the
+            # axial stiffness EA sets, whatever the size of the load)
+            done = finite & ((rn <= tolerance) | (step <= 1e-10 * lscale))
+            dx_new = jnp.linalg.solve(jac, -r)
+            x_acc = jnp.where(finite, x_try, x_acc)
+            dx = jnp.where(finite, dx_new, dx)
+            a = jnp.where(finite, 1.0, 0.5 * a)
+            return x_acc, x_acc + a * dx, dx, a, it + 1, rn, done
 
-    def tangent(y, lf):
-        """The structured Newton matrix of the static residual: K + (λ·Φ)_qq and Φ_q
-        (dae.iteration_matrix at rest, β' = γ' = 0), plus a mass-proportional
-        regularization ε M, with the identity rows of the padding coordinates
-        (residual q − q_fixed there).
-
-        ε = ``regularization`` · max|diag K| / max(m): coordinates with neither
-        stiffness nor load (e.g. the rotation of a body whose joints all act at its
-        centre) would make K singular; the residual, hence the solution, is unchanged.
-        ε is taken from the matrix being built, so the tangent is traced once."""
-        q, lam = dae.from_solver_order(system, y)
-        a = dae.iteration_matrix(system, q, zero_v, lam, t, 0.0, 0.0,
-                                 system.constraint_jacobian(q, t), load_factor=lf)
-        diag = jnp.abs(jnp.diagonal(a.e))[:n_border]
-        if system.chain_size:
-            pad = inactive[chain]
-            diag = jnp.concatenate([jnp.abs(jax.vmap(jnp.diagonal)(a.chain.diagonal)).ravel() * ~pad, diag])
-        eps = regularization * jnp.max(diag, initial=0.0) / m_max
-        if system.chain_size:
-            # the beam mass has a unit dummy mass on padding nodes: those rows become I
-            a = eqx.tree_at(lambda m: m.chain, a,
-                            (a.chain + beam_mass.scale(eps)).add_diagonal(pad.astype(q.dtype) * (1.0 - eps)))
-        idx = jnp.arange(n_border)
-        return eqx.tree_at(lambda m: m.e, a, a.e.at[idx, idx].add(eps * border_mass))
-
-    x0 = dae.to_solver_order(system, q0, lam0)
-
-    # full Newton steps: the residual of a slender beam may grow by orders of magnitude
-    # after the first (linear) step and still converge quadratically, so a monotone
-    # line search would stall; a step is halved only while the residual at the trial
-    # point is not finite. Converged when the scaled residual is below tolerance, or
-    # when the correction is below 1e-10 of the model size: with quadratic convergence
-    # the error is then ~1e-20 and the residual at its round-off floor (which the axial
-    # stiffness EA sets, whatever the size of the load)
-    newton = ModifiedNewton(tolerance=1e-10, max_iterations=max_iterations, contraction=0.0,
-                            residual_tolerance=tolerance, max_backtracks=max_iterations,
-                            linear_solver=AutoSaddleSolver())
+        init = (x0, x0, jnp.zeros_like(x0), jnp.array(0.0), 0, jnp.array(jnp.inf), jnp.array(False))
+        x_acc, _, _, _, it, rn, done = jax.lax.while_loop(cond, body, init)
+        return x_acc, it, rn, done
 
     def load_step(carry, lf):
         x, failed = carry
-        sol = newton.solve(lambda y: residual(y, lf), lambda y: tangent(y, lf), x, size=n,
-                           scale=lscale, residual_norm=norm)
-        ok = sol.converged & ~failed
-        x_out = jnp.where(ok, sol.x, x)
-        return (x_out, failed | ~ok), (sol.iterations, sol.residual_norm, ok)
+        x_new, it, res, ok = newton(x, lf)
+        ok = ok & ~failed
+        x_out = jnp.where(ok, x_new, x)
+        return (x_out, failed | ~ok), (it, res, ok)
 
+    # mass-proportional regularization of the Newton matrix: coordinates with neither
+    # stiffness nor load (e.g. the rotation of a body whose joints all act at its
+    # centre) would make it singular; the residual, hence the solution, is unchanged
+    m = jnp.diag(system.mass_matrix()) * ~system.inactive_mask()
+    jqq = jnp.abs(jnp.diag(jax.jacfwd(residual, has_aux=True)(jnp.concatenate([q0, lam0]), 1.0)[0]))[:n]
+    eps = regularization * jnp.max(jqq) / jnp.maximum(jnp.max(m), 1e-300)
+    reg = jnp.diag(jnp.concatenate([eps * m, jnp.zeros(lam0.shape[0])]))
+    x0 = jnp.concatenate([q0, lam0])
     (x, _), (its, res, ok) = jax.lax.scan(load_step, (x0, jnp.array(False)), load_factors)
-    q, lam = dae.from_solver_order(system, x)
-    return q, lam, its, res, ok
+    return x[:n], x[n:] * fscale, its, res, ok
 
 
 def solve_static_pure(system: System, state: State, *, load_steps: int = 1,

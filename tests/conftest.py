@@ -14,8 +14,6 @@ def rng():
 
 
 def pytest_configure(config):
-    if config.pluginmanager.hasplugin("xdist"):
-        config.pluginmanager.register(_Scheduler(), "ancf_jax_scheduler")
     os.environ.setdefault("ANCF_JAX_QUICK", "1")
     # One persistent compilation cache for the whole run: the xdist workers and the
     # subprocesses (CLI, notebooks) compile many identical programs (M1 and M2 appear
@@ -66,36 +64,3 @@ def _free_programs_near_the_limit():
     from ancf_jax import _memory
     _memory.relieve(0.6)
     yield
-
-
-# Scheduling under ``--dist loadscope`` (pyproject addopts): a module is one unit of work,
-# so that module-scoped fixtures (built systems, compiled programs) are made once. The
-# heaviest modules go first, so that neither worker is left with one of them at the end,
-# and tests that share nothing (each notebook, each shipped scenario's round trip) are
-# units of their own, so that the two workers split them.
-_FIRST = ("tests/test_sweep.py", "tests/test_notebooks.py", "tests/scenario/test_shipped.py",
-          "tests/test_identification.py", "tests/test_fatigue.py", "tests/models/test_m2.py",
-          "tests/integrators/test_integrators.py", "tests/test_newton_matrix.py")
-_ALONE = ("tests/test_notebooks.py::test_notebook_runs_in_quick_mode[",
-          "tests/scenario/test_shipped.py::test_round_trip_validates_builds_and_runs[")
-
-
-def pytest_collection_modifyitems(config, items):
-    def rank(item):
-        return next((i for i, f in enumerate(_FIRST) if item.nodeid.startswith(f)), len(_FIRST))
-    items.sort(key=rank)  # stable: the order within a module is kept
-
-
-class _Scheduler:
-    """Registered in pytest_configure only where xdist is active (a child pytest run with
-    ``-p no:xdist`` does not know the hook)."""
-
-    @staticmethod
-    def pytest_xdist_make_scheduler(config, log):
-        from xdist.scheduler import LoadScopeScheduling
-
-        class Scheduling(LoadScopeScheduling):
-            def _split_scope(self, nodeid):
-                return nodeid if nodeid.startswith(_ALONE) else super()._split_scope(nodeid)
-
-        return Scheduling(config, log)
