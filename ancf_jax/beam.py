@@ -217,6 +217,7 @@ class Beam(eqx.Module):
     def stress(self, nodes, s, y=None, measure="exact"):
         """Signed bending stress σ [Pa] at arc length s on fibre y (default: outer fibre,
         left side) (Eqs. 15–18)."""
+        self.section.require_modulus("a bending stress")
         y = self.section.fibre_distance if y is None else y
         e, x, l, k = self.element_at(nodes, s)
         e_ref = jnp.concatenate([self.mesh.reference_nodes[k], self.mesh.reference_nodes[k + 1]])
@@ -225,6 +226,7 @@ class Beam(eqx.Module):
     @eqx.filter_jit
     def element_stress(self, nodes, element, xi, y=None, measure="exact"):
         """Stress [Pa] in element ``element`` at local coordinate ξ = x/l ∈ [0, 1]."""
+        self.section.require_modulus("a bending stress")
         y = self.section.fibre_distance if y is None else y
         e = self.mesh.element_coordinates(nodes)[element]
         e_ref = self.mesh.reference_elements[element]

@@ -44,6 +44,7 @@ def fibre_stress(beam: Beam, nodes, element, xi, fibre=None, measure="exact"):
         fibre: fibre distance c [m] (default the section's outer fibre).
         measure: curvature measure of the bending stress.
     """
+    beam.section.require_modulus("a fibre stress")
     c = beam.section.fibre_distance if fibre is None else fibre
     e = beam.mesh.element_coordinates(nodes)[element]
     e_ref = beam.mesh.reference_elements[element]

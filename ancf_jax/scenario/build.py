@@ -62,8 +62,13 @@ def on_beam(s: float, length: float) -> float:
 
 
 def section_of(beam: S.BeamSpec, length: float) -> Section:
-    """The beam's :class:`Section`; ρA from mass_per_length, density·A or mass/L."""
+    """The beam's :class:`Section` (from E, A, I or from EA, EI); ρA from
+    mass_per_length, density·A or mass/L."""
     sec = beam.section
+    if sec.EA is not None:
+        mpl = sec.mass_per_length if sec.mass_per_length is not None else sec.mass / length
+        return Section.from_stiffness(sec.EA, sec.EI, mpl, fibre_distance=sec.fibre,
+                                      youngs_modulus=sec.E)
     d = sec.diameter
     area = sec.A if sec.A is not None else math.pi * d * d / 4.0
     inertia = sec.I if sec.I is not None else math.pi * d**4 / 64.0

@@ -180,6 +180,23 @@ class Checker:
 
     def section(self, path, sec: S.SectionSpec):
         self.exclusive(path, sec, ("mass_per_length", "density", "mass"), required=True)
+        stiff = [k for k in ("EA", "EI") if getattr(sec, k) is not None]
+        geometric = [k for k in ("A", "I", "diameter") if getattr(sec, k) is not None]
+        if stiff and geometric:
+            raise Invalid(path + (geometric[0],), f"{geometric[0]} cannot be given together with "
+                          f"{stiff[0]}", "either E with A and I (or diameter), or EA and EI")
+        if stiff:
+            if len(stiff) == 1:
+                other = "EI" if stiff[0] == "EA" else "EA"
+                raise Invalid(path + (other,), f"missing required key (given {stiff[0]})",
+                              "EA [N] and EI [N·m²], both > 0")
+            if sec.density is not None:
+                raise Invalid(path + ("density",), "density needs the area A (the section is given "
+                              "by EA and EI)", "mass_per_length or mass")
+            return
+        if sec.E is None:
+            raise Invalid(path + ("E",), "missing required key: give E with A and I (or diameter), "
+                          "or EA and EI", "a number > 0 [Pa]")
         for k in ("A", "I"):
             if getattr(sec, k) is None and sec.diameter is None:
                 raise Invalid(path + (k,), "missing required key (no diameter given)",

@@ -99,10 +99,14 @@ Geometry = Annotated[Union[Straight, ThroughPoints, Arc], Field(discriminator="t
 
 
 class SectionSpec(Table):
-    """Cross-section and material. Give E; A and I, or a diameter (solid circle) from
-    which missing A and I follow; and exactly one of mass_per_length, density, mass."""
+    """Cross-section and material. Give either E with A and I, or a diameter (solid
+    circle) from which missing A and I follow; or the stiffnesses EA and EI as Exudyn
+    takes them (then E is optional, for stresses only); and exactly one of
+    mass_per_length, density, mass (density needs A)."""
 
-    E: float = key(unit="Pa", gt=0.0, allow_inf_nan=False, doc="Young's modulus")
+    E: Optional[float] = key(None, unit="Pa", gt=0.0, allow_inf_nan=False,
+                             doc="Young's modulus (required with A, I or diameter; with EA and EI "
+                                 "only for stresses)")
     A: Optional[float] = key(None, unit="m²", gt=0.0, allow_inf_nan=False,
                              doc="area (default π d²/4 from diameter)")
     I: Optional[float] = key(None, unit="m⁴", gt=0.0, allow_inf_nan=False,
@@ -117,6 +121,10 @@ class SectionSpec(Table):
                                 doc="total mass of the beam (ρA = mass / L)")
     fibre: Optional[float] = key(None, unit="m", gt=0.0, allow_inf_nan=False,
                                  doc="outer-fibre distance for stresses (default d/2, else √(2I/A))")
+    EA: Optional[float] = key(None, unit="N", gt=0.0, allow_inf_nan=False,
+                              doc="axial stiffness (instead of E·A; give EI too)")
+    EI: Optional[float] = key(None, unit="N·m²", gt=0.0, allow_inf_nan=False,
+                              doc="bending stiffness (instead of E·I; give EA too)")
 
 
 class FormulationSpec(Table):
