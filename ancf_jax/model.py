@@ -77,6 +77,13 @@ def beam_point(beam: str, s: float) -> PointRef:
     return PointRef("beam", beam, check_nonnegative(f"arc length s on beam {beam!r}", s, "m"))
 
 
+#: clamp modes (:class:`ancf_jax.joints.Clamp`)
+CLAMP_MODES = ("full", "direction", "exudyn")
+#: coordinates of a beam node and of a body, in the order of q (:meth:`Model.coordinate`)
+NODE_COMPONENTS = ("x", "y", "slope_x", "slope_y")
+BODY_COMPONENTS = ("x", "y", "theta")
+
+
 @dataclasses.dataclass
 class _BeamSpec:
     mesh: BeamMesh
@@ -191,9 +198,10 @@ class Model:
         """Clamp a beam node to the ground at its initial position and slope.
 
         ``mode="full"`` fixes the slope vector (4 equations), ``"direction"`` only its
-        direction (3 equations).
+        direction (3 equations), ``"exudyn"`` the coordinates x, y and r'_y (3 equations,
+        Exudyn's clamp; see :class:`~ancf_jax.joints.Clamp`).
         """
-        check_choice(f"mode of clamp {name!r}", mode, ("full", "direction"))
+        check_choice(f"mode of clamp {name!r}", mode, CLAMP_MODES)
         self._claim(name, "joint")
         self._joints.append(("clamp", name, dict(beam=beam, node=node, mode=mode)))
         return name
@@ -243,6 +251,39 @@ class Model:
             rate = float(r)
         self._claim(name, "joint")
         self._sliders[name] = dict(body=body, beam=beam, s=s0, local=lp, hold=bool(hold), rate=rate)
+        return name
+
+    def coordinate(self, name: str, point: PointRef, component: str, *, value=None,
+                   function: Callable | None = None) -> str:
+        """Constrain one coordinate (Exudyn's ``CoordinateConstraint`` to the ground).
+
+        Args:
+            name: unique name.
+            point: a beam node (:func:`node`; components ``"x"``, ``"y"``,
+                ``"slope_x"``, ``"slope_y"``: r_x, r_y, r'_x, r'_y) or a body
+                (:func:`body_point` at its centre; components ``"x"``, ``"y"``,
+                ``"theta"``).
+            component: the coordinate.
+            value: the value held [m, -, rad]; default its initial value.
+            function: instead of ``value``, a JAX-traceable ``t -> value`` it follows.
+        """
+        if not isinstance(point, PointRef) or point.kind not in ("node", "body"):
+            raise ModelError(f"point of coordinate constraint {name!r} must be node(beam, i) or "
+                             f"body_point(body), got {point!r}")
+        if point.kind == "body" and tuple(point.value) != (0.0, 0.0):
+            raise ModelError(f"point of coordinate constraint {name!r} must be a body's centre "
+                             "(body_point(body) without local)")
+        check_choice(f"component of coordinate constraint {name!r}", component,
+                     NODE_COMPONENTS if point.kind == "node" else BODY_COMPONENTS)
+        if value is not None and function is not None:
+            raise ModelError(f"coordinate constraint {name!r}: give value or function, not both")
+        if function is not None and not callable(function):
+            raise ModelError(f"function of coordinate constraint {name!r} must be callable")
+        if value is not None:
+            value = float(check_finite(f"value of coordinate constraint {name!r}", value))
+        self._claim(name, "joint")
+        self._joints.append(("coordinate", name, dict(point=point, component=component, value=value,
+                                                      function=function)))
         return name
 
     def prescribe_point(self, name: str, point: PointRef, function: Callable) -> str:
@@ -503,6 +544,18 @@ class Model:
                 u0 = rot_t @ (d / np.linalg.norm(d))
                 constraints.append(J.FixedJoint(name, pt, P.BodyPoint(k, jnp.asarray(local, float)),
                                                 jnp.asarray(u0, float)))
+            elif kind == "coordinate":
+                ref = a["point"]
+                if ref.kind == "node":
+                    b, i = node_index(ref.target, ref.value)
+                    idx = skeleton.beam_offset(b) + 4 * i + NODE_COMPONENTS.index(a["component"])
+                else:
+                    idx = skeleton.body_offset(body_of(ref.target)) + BODY_COMPONENTS.index(a["component"])
+                if a["function"] is not None:
+                    constraints.append(J.PrescribedCoordinate(name, idx, a["function"]))
+                else:
+                    value = q0[idx] if a["value"] is None else a["value"]
+                    constraints.append(J.FixedCoordinate(name, idx, jnp.asarray(value, float)))
             elif kind == "prescribe_point":
                 constraints.append(J.PrescribedPoint(name, resolve(a["point"], what), a["function"]))
             elif kind == "prescribe_body":

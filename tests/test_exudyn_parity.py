@@ -85,3 +85,73 @@ def test_scenario_section_given_both_ways_is_identical(tmp_path):
     assert float(a.bending_stiffness) == float(b.bending_stiffness)
     assert float(a.mass_per_length) == float(b.mass_per_length)
     assert not b.modulus_known
+
+
+# ----------------------------------------------------------------------------- 2. coordinate constraints
+EA_C, EI_C, L_C = 1.0e8, 1.0e2, 1.0
+
+
+def _cantilever(clamp):
+    from ancf_jax.model import Model, node
+    m = Model(gravity=(0.0, 0.0))
+    m.add_beam("beam", mesh.straight((0, 0), (1, 0), L_C, 2), Section.from_stiffness(EA_C, EI_C, 0.1))
+    clamp(m, node)
+    return m
+
+
+def test_exudyn_clamp_cantilever_matches_beam_theory():
+    """The Exudyn clamp (x, y, r'_y held: 3 equations of rank 3), written as three
+    coordinate constraints, under a small tip load: δ = P L³ / 3EI. Cubic elements hold
+    the linear solution exactly; the rest is the geometric nonlinearity, O((δ/L)²) ≈
+    1e-10 at δ/L = 1e-5, and the statics tolerance."""
+    from ancf_jax.model import _JACOBIAN
+    from ancf_jax.statics import solve_static
+
+    delta = 1e-5 * L_C
+    p = 3.0 * EI_C * delta / L_C**3
+
+    def clamp(m, node):
+        m.coordinate("x0", node("beam", 0), "x")
+        m.coordinate("y0", node("beam", 0), "y", value=0.0)
+        m.coordinate("slope0", node("beam", 0), "slope_y")
+        m.point_force("load", node("beam", -1), (0.0, -p))
+
+    system, state = _cantilever(clamp).build()
+    assert system.n_constraints == 3
+    assert np.linalg.matrix_rank(np.asarray(_JACOBIAN(system, state.q, jnp.zeros(())))) == 3
+    sol = solve_static(system, state, load_steps=1, tolerance=1e-12)
+    nodes = np.asarray(system.beam_nodes(sol.state.q, 0))
+    assert nodes[-1, 1] == pytest.approx(-delta, rel=1e-8)
+    assert abs(nodes[0, 1]) < 1e-20 and abs(nodes[0, 3]) < 1e-20
+
+    # the named clamp option is the same three equations
+    named, _ = _cantilever(lambda m, node: m.clamp("support", "beam", 0, mode="exudyn")).build(assemble=False)
+    q = jnp.asarray(np.random.default_rng(1).standard_normal(system.n_coordinates))
+    np.testing.assert_array_equal(np.asarray(named.constraint(q)), np.asarray(system.constraint(q)))
+
+
+def test_coordinate_constraint_follows_a_time_function():
+    """A coordinate given by a function of time: Φ = q[i] − f(t) (beam node and body)."""
+    from ancf_jax.model import body_point
+
+    def clamp(m, node):
+        m.add_body("b", mass=1.0, inertia=1.0, position=(0.0, 1.0))
+        m.coordinate("tip", node("beam", -1), "slope_x", function=lambda t: 1.0 + 0.1 * t)
+        m.coordinate("turn", body_point("b"), "theta", function=lambda t: 2.0 * t)
+
+    system, state = _cantilever(clamp).build(assemble=False)
+    q = jnp.asarray(np.random.default_rng(2).standard_normal(system.n_coordinates))
+    phi = np.asarray(system.constraint(q, 0.5))
+    tip = system.beam_offset(0) + 4 * 2 + 2
+    np.testing.assert_array_equal(phi, [float(q[tip]) - 1.05, float(q[2]) - 1.0])
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda m, node: m.coordinate("c", node("beam", 0), "theta"), "component of coordinate constraint 'c'"),
+    (lambda m, node: m.coordinate("c", node("beam", 0), "x", value=1.0, function=lambda t: t),
+     "give value or function, not both"),
+    (lambda m, node: m.clamp("c", "beam", 0, mode="exuydn"), "mode of clamp 'c'"),
+])
+def test_coordinate_constraint_errors(call, match):
+    with pytest.raises(ModelError, match=match):
+        _cantilever(call)

@@ -153,6 +153,9 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
             elif j.type == "sliding":
                 m.slider(name, j.body, j.beam, on_beam(j.s, lengths[j.beam]), local=j.local, hold=j.hold,
                          rate=j.rate)
+            elif j.type == "coordinate":
+                m.coordinate(name, point_ref(spec, lengths, j.point), j.component, value=j.value,
+                             function=j.function)
             elif j.type == "prescribed_point":
                 m.prescribe_point(name, point_ref(spec, lengths, j.point), PointPath(j.x, j.y))
             else:

@@ -256,11 +256,27 @@ class Checker:
             elif j.type == "revolute":
                 self.point(path + ("a",), j.a)
                 self.point(path + ("b",), j.b)
+            elif j.type == "coordinate":
+                self.coordinate(path, j)
             if j.type in ("fixed", "sliding", "prescribed_body"):
                 self.body(path + ("body",), j.body)
             if j.type == "sliding":
                 self.beam(path + ("beam",), j.beam)
                 self.arc_length(path + ("s",), j.beam, j.s, "initial arc length s =")
+
+    def coordinate(self, path, j: S.CoordinateSpec):
+        p = j.point
+        node = p.beam is not None and p.node is not None and p.body is None and p.ground is None
+        body = p.body is not None and p.local is None and p.point is None and p.beam is None and p.ground is None
+        if not (node or body):
+            raise Invalid(path + ("point",), "not a beam node or a body's centre",
+                          '{ beam = "a", node = i } or { body = "b" }')
+        self.point(path + ("point",), p)
+        allowed = ("x", "y", "slope_x", "slope_y") if node else ("x", "y", "theta")
+        if j.component not in allowed:
+            raise Invalid(path + ("component",), f'"{j.component}" is not a coordinate of a '
+                          f'{"beam node" if node else "body"}', ", ".join(allowed))
+        self.exclusive(path, j, ("value", "function"))
 
     def loads(self):
         for name, f in self.spec.loads.items():

@@ -39,6 +39,7 @@ TABLES = [
     ('`[joints.NAME]` with `type = "sliding"`', S.SlidingSpec),
     ('`[joints.NAME]` with `type = "prescribed_point"`', S.PrescribedPointSpec),
     ('`[joints.NAME]` with `type = "prescribed_body"`', S.PrescribedBodySpec),
+    ('`[joints.NAME]` with `type = "coordinate"`', S.CoordinateSpec),
     ('`[loads.NAME]` with `type = "point_force"`', S.PointForceSpec),
     ('`[loads.NAME]` with `type = "torque"`', S.TorqueSpec),
     ('`[loads.NAME]` with `type = "spring_damper"`', S.SpringDamperSpec),

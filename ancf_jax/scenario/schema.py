@@ -191,8 +191,9 @@ class ClampSpec(Table):
     type: Literal["clamp"] = key(doc="joint type")
     beam: str = key(doc="beam name")
     node: int = key(0, doc="node index (−1: the last)")
-    mode: Literal["full", "direction"] = key("full", doc="full: slope vector fixed (4 equations); "
-                                                         "direction: slope direction only (3)")
+    mode: Literal["full", "direction", "exudyn"] = key(
+        "full", doc="full: slope vector fixed (4 equations); direction: slope direction only (3); "
+                    "exudyn: x, y and r'_y fixed (3, Exudyn's clamp)")
 
 
 class PinSpec(Table):
@@ -237,6 +238,19 @@ class SlidingSpec(Table):
                                 "(initial.mode = static), free from t = 0; true: held for the whole run")
 
 
+class CoordinateSpec(Table):
+    """One coordinate of a beam node or a body held at a value or following a function
+    of time (Exudyn's CoordinateConstraint to the ground)."""
+
+    type: Literal["coordinate"] = key(doc="joint type")
+    point: PointRef = key(doc="a beam node { beam, node } or a body's centre { body }")
+    component: Literal["x", "y", "slope_x", "slope_y", "theta"] = key(
+        doc="node: x, y, slope_x, slope_y (r_x, r_y, r'_x, r'_y); body: x, y, theta")
+    value: Optional[float] = key(None, unit="m, -, rad", allow_inf_nan=False,
+                                 doc="value held (default the initial value)")
+    function: Optional[TimeFunction] = key(None, unit="m, -, rad", doc="instead of value: the value over time")
+
+
 class PrescribedPointSpec(Table):
     """A point follows (x(t), y(t)) [m]."""
 
@@ -256,7 +270,8 @@ class PrescribedBodySpec(Table):
 
 
 Joint = Annotated[Union[ClampSpec, PinSpec, RevoluteSpec, FixedSpec, SlidingSpec,
-                        PrescribedPointSpec, PrescribedBodySpec], Field(discriminator="type")]
+                        PrescribedPointSpec, PrescribedBodySpec, CoordinateSpec],
+                  Field(discriminator="type")]
 
 
 # ----------------------------------------------------------------------------- loads

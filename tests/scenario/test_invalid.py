@@ -41,6 +41,10 @@ CASES = [
     ("missing E", replaced(("E = 2e11\n", "")), "beams.arm.section.E", "a number > 0 [Pa]"),
     ("section by both E, A, I and EA, EI", replaced(("density = 7800.0", "density = 7800.0\nEA = 2e7\nEI = 200.0")),
      "beams.arm.section.A", "either E with A and I (or diameter), or EA and EI"),
+    ("coordinate of a beam point", added('[joints.c]\ntype = "coordinate"\npoint = { beam = "arm", s = 0.5 }\n'
+                                          'component = "y"'), "joints.c.point", '{ beam = "a", node = i } or { body = "b" }'),
+    ("theta of a beam node", added('[joints.c]\ntype = "coordinate"\npoint = { beam = "arm", node = 1 }\n'
+                                   'component = "theta"'), "joints.c.component", "x, y, slope_x, slope_y"),
     ("EA without EI", replaced(("E = 2e11\nA = 1e-4\nI = 1e-9\ndensity = 7800.0", "EA = 2e7\nmass = 7.8")),
      "beams.arm.section.EI", "EA [N] and EI [N·m²]"),
     ("missing joint type", replaced(('type = "clamp"\n', "")), "joints.clamp.type", '"clamp", "pin"'),
