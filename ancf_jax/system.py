@@ -51,6 +51,8 @@ class System(eqx.Module):
         gravity: acceleration of gravity [m/s²], shape (2,).
         n_sliding: number of sliding coordinates (static).
         body_names, beam_names, sliding_names: names for messages and outputs (static).
+        gravity_off: names of the bodies and beams that gravity does not act on (static;
+            empty: on all).
     """
 
     bodies: RigidBodies
@@ -62,6 +64,7 @@ class System(eqx.Module):
     body_names: tuple = eqx.field(static=True, default=())
     beam_names: tuple = eqx.field(static=True, default=())
     sliding_names: tuple = eqx.field(static=True, default=())
+    gravity_off: tuple = eqx.field(static=True, default=())
 
     # ------------------------------------------------------------------ layout
     @property
@@ -187,10 +190,24 @@ class System(eqx.Module):
                    jnp.zeros(()))
 
     def gravity_load(self):
-        """Generalized gravity force (constant), shape (n,)."""
+        """Generalized gravity force (constant), shape (n,); zero on the items named in
+        :attr:`gravity_off`."""
+        if self.gravity_off:
+            return self._gravity_load_on_some()
         parts = [jnp.reshape(self.bodies.mass[:, None] * jnp.array([1.0, 1.0, 0.0])[None, :]
                              * jnp.concatenate([self.gravity, jnp.zeros(1)])[None, :], (-1,))]
         parts += [jnp.reshape(b.gravity_load(self.gravity), (-1,)) for b in self.beams]
+        parts += [jnp.zeros(self.n_sliding)]
+        return jnp.concatenate(parts)
+
+    def _gravity_load_on_some(self):
+        """:meth:`gravity_load` with gravity off on the items of :attr:`gravity_off`."""
+        on = np.array([n not in self.gravity_off for n in self.body_names], float)
+        body = (self.bodies.mass * jnp.asarray(on))[:, None] * jnp.concatenate(
+            [self.gravity, jnp.zeros(1)])[None, :]
+        parts = [jnp.reshape(body, (-1,))]
+        parts += [jnp.reshape(b.gravity_load(self.gravity), (-1,)) if name not in self.gravity_off
+                  else jnp.zeros(b.n_coordinates) for b, name in zip(self.beams, self.beam_names)]
         parts += [jnp.zeros(self.n_sliding)]
         return jnp.concatenate(parts)
 

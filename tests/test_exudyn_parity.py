@@ -155,3 +155,130 @@ def test_coordinate_constraint_follows_a_time_function():
 def test_coordinate_constraint_errors(call, match):
     with pytest.raises(ModelError, match=match):
         _cantilever(call)
+
+
+# ----------------------------------------------------------------------------- 3. point masses, per-item loads
+G = (0.0, -9.81)
+
+
+def _tip_mass(point_mass, *, gravity_on_items=True):
+    """A cantilever (Exudyn clamp) with a mass pinned at its tip: a point mass, or a
+    rigid body of any inertia joined at its centre (which then never turns)."""
+    from ancf_jax.model import Model, body_point, node
+    m = Model(gravity=G)
+    m.add_beam("beam", mesh.straight((0, 0), (1, 0), L_C, 2), Section.from_stiffness(EA_C, EI_C, 0.1),
+               gravity=gravity_on_items)
+    m.clamp("support", "beam", 0, mode="exudyn")
+    if point_mass:
+        m.add_point_mass("mass", mass=0.3, position=(L_C, 0.0), gravity=gravity_on_items)
+    else:
+        m.add_body("mass", mass=0.3, inertia=0.7, position=(L_C, 0.0))
+    m.revolute("pin", node("beam", -1), body_point("mass"))
+    if not gravity_on_items:
+        m.mass_proportional_load("g_beam", "beam", G)
+        m.mass_proportional_load("g_mass", "mass", G)
+    return m
+
+
+def test_point_mass_moves_as_a_body_whose_rotation_has_no_inertia():
+    """Index-1 accelerations at t = 0: a point mass at a cantilever's tip and a rigid body
+    joined at its centre (θ̈ = 0: nothing turns it) give the same beam and mass
+    accelerations (to round-off); the point mass's rotation constraint carries no force.
+    Gravity switched off on every item and replaced by mass-proportional loads of g on
+    each gives the same generalized force and accelerations."""
+    from ancf_jax import dae
+    acc = eqx.filter_jit(lambda s, st: dae.accelerations(s, st.q, st.v, st.t))
+    # the initial states are consistent (at rest, on the joints): no assembly needed
+    body_sys, body_state = _tip_mass(False).build(assemble=False)
+    point_sys, point_state = _tip_mass(True).build(assemble=False)
+    loads_sys, loads_state = _tip_mass(True, gravity_on_items=False).build(assemble=False)
+    assert point_sys.constraint_labels()[-1] == "mass.rotation[0]"
+    assert point_sys.n_constraints == body_sys.n_constraints + 1
+    a_body, lam_body = acc(body_sys, body_state)
+    a_point, lam_point = acc(point_sys, point_state)
+    scale = float(jnp.max(jnp.abs(a_body)))
+    np.testing.assert_allclose(np.asarray(a_point[3:]), np.asarray(a_body[3:]), rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(np.asarray(a_point[:2]), np.asarray(a_body[:2]), rtol=0, atol=1e-12 * scale)
+    assert float(a_body[2]) == pytest.approx(0.0, abs=1e-12 * scale)
+    assert abs(float(lam_point[-1])) < 1e-12 * float(jnp.max(jnp.abs(lam_point)))
+    np.testing.assert_allclose(np.asarray(lam_point[:-1]), np.asarray(lam_body), rtol=1e-12)
+
+    # gravity per item: off everywhere, replaced by mass-proportional loads
+    assert loads_sys.gravity_off == ("mass", "beam")
+    assert float(jnp.max(jnp.abs(loads_sys.gravity_load()))) == 0.0
+    q, v = point_state.q, point_state.v
+    force = eqx.filter_jit(lambda s: s.gravity_load() + s.applied_force(q, v, 0.0))
+    np.testing.assert_allclose(np.asarray(force(loads_sys)), np.asarray(force(point_sys)), rtol=0, atol=1e-14)
+    a_loads, _ = acc(loads_sys, loads_state)
+    np.testing.assert_allclose(np.asarray(a_loads), np.asarray(a_point), rtol=0, atol=1e-12 * scale)
+
+
+@pytest.mark.parametrize("add, match", [
+    (lambda m, P: m.fixed("f", P.node("beam", -1), body="pm"), "joint 'f' needs a rotation .*point mass"),
+    (lambda m, P: m.torque("t", "pm", 1.0), "force 't' needs a rotation .*point mass"),
+    (lambda m, P: m.revolute("r", P.node("beam", -1), P.body_point("pm", (0.1, 0.0))),
+     "needs a body point away from the centre"),
+    (lambda m, P: m.prescribe_body("p", "pm", "theta", lambda t: t), "needs a rotation"),
+    (lambda m, P: m.mass_proportional_load("g", "nothing", (0.0, 1.0)), "no beam or body"),
+    (lambda m, P: m.add_point_mass("pm2", mass=0.0), "mass of point mass 'pm2'"),
+])
+def test_point_mass_refuses_what_needs_a_rotation(add, match):
+    import ancf_jax.model as P
+    m = P.Model()
+    m.add_beam("beam", mesh.straight((0, 0), (1, 0), 1.0, 2), Section.from_stiffness(EA_C, EI_C, 0.1))
+    m.add_point_mass("pm", mass=1.0, position=(1.0, 0.0))
+    with pytest.raises(ModelError, match=match):
+        add(m, P)
+        m.build(assemble=False)
+
+
+PORTED = '''
+gravity = [0.0, -9.81]
+[beams.cable]
+geometry = { type = "straight", length = 1.0 }
+elements = 2
+section = { EA = 1e8, EI = 100.0, mass_per_length = 0.1 }
+gravity = false
+[bodies.bob]
+mass = 0.3
+position = [1.0, 0.0]
+point_mass = true
+[joints.clamp]
+type = "clamp"
+beam = "cable"
+mode = "exudyn"
+[joints.pin]
+type = "revolute"
+a = { beam = "cable", node = -1 }
+b = { body = "bob" }
+[joints.lift]
+type = "coordinate"
+point = { beam = "cable", node = 1 }
+component = "y"
+function = "0.01 * t"
+[loads.g_cable]
+type = "mass_proportional"
+item = "cable"
+acceleration = [0.0, -9.81]
+[solver]
+t_end = 0.01
+'''
+
+
+def test_scenario_with_the_exudyn_items(tmp_path):
+    """A scenario using every new key builds to the system the Python API builds."""
+    from ancf_jax.forces import BeamMassLoad
+    from ancf_jax.joints import Clamp, FixedCoordinate, PrescribedCoordinate
+    from ancf_jax.scenario import load_scenario
+    path = tmp_path / "ported.toml"
+    path.write_text(PORTED)
+    system, state = load_scenario(str(path)).model().build(assemble=False)
+    assert system.gravity_off == ("cable",)
+    kinds = [type(c) for c in system.constraints]
+    assert kinds[0] is Clamp and system.constraints[0].mode == "exudyn"
+    assert kinds[2] is PrescribedCoordinate and kinds[3] is FixedCoordinate
+    assert system.constraint_labels()[-1] == "bob.rotation[0]"
+    assert float(system.bodies.inertia[0]) == 0.0
+    assert isinstance(system.forces[0], BeamMassLoad)
+    phi = np.asarray(system.constraint(state.q, 2.0))
+    assert phi[5] == pytest.approx(-0.02, rel=1e-15)  # node 1 starts at y = 0, f(2) = 0.02

@@ -126,7 +126,7 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
                                       bending_quadrature=tuple(f.bending_quadrature))
             nodes, vel = initial_nodes(b, mesh, length)
             m.add_beam(name, mesh, section, alpha=b.alpha, beta=b.beta, formulation=formulation,
-                       initial_nodes=nodes, initial_velocities=vel)
+                       initial_nodes=nodes, initial_velocities=vel, gravity=b.gravity)
             shapes[name] = (Beam(mesh, section), np.asarray(mesh.reference_nodes) if nodes is None else nodes)
 
     poses: dict[str, tuple[float, float, float]] = {}
@@ -137,8 +137,12 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
             else:
                 position = b.position if b.position is not None else (0.0, 0.0)
             poses[name] = (position[0], position[1], b.angle)
-            m.add_body(name, mass=b.mass, inertia=b.inertia, position=position, angle=b.angle,
-                       velocity=b.velocity, angular_velocity=b.angular_velocity)
+            if b.point_mass:
+                m.add_point_mass(name, mass=b.mass, position=position, velocity=b.velocity,
+                                 gravity=b.gravity)
+            else:
+                m.add_body(name, mass=b.mass, inertia=b.inertia, position=position, angle=b.angle,
+                           velocity=b.velocity, angular_velocity=b.angular_velocity, gravity=b.gravity)
 
     for name, j in spec.joints.items():
         with _located(file, ("joints", name)):
@@ -167,6 +171,8 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
                 m.point_force(name, point_ref(spec, lengths, f.point), f.force, f.time_function)
             elif f.type == "torque":
                 m.torque(name, f.body, f.torque, f.time_function)
+            elif f.type == "mass_proportional":
+                m.mass_proportional_load(name, f.item, f.acceleration, f.time_function)
             else:
                 m.spring_damper(name, point_ref(spec, lengths, f.a), point_ref(spec, lengths, f.b),
                                 stiffness=f.stiffness, damping=f.damping, rest_length=f.rest_length)

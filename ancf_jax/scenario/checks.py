@@ -242,6 +242,14 @@ class Checker:
         for name, b in self.spec.bodies.items():
             path = ("bodies", name)
             self.exclusive(path, b, ("position", "at"))
+            if b.point_mass:
+                for k, unset in (("inertia", None), ("angle", 0.0), ("angular_velocity", None), ("points", {})):
+                    if getattr(b, k) != unset:
+                        raise Invalid(path + (k,), f"{k} does not go with point_mass = true",
+                                      "mass, position or at, velocity, gravity")
+            elif b.inertia is None:
+                raise Invalid(path + ("inertia",), "missing required key", "a number > 0 [kg·m²] "
+                              "(or point_mass = true)")
             if b.at is not None:
                 self.point(path + ("at",), b.at, before_body=name)
 
@@ -260,9 +268,16 @@ class Checker:
                 self.coordinate(path, j)
             if j.type in ("fixed", "sliding", "prescribed_body"):
                 self.body(path + ("body",), j.body)
+            if j.type == "fixed":
+                self.rotating(path + ("body",), j.body, "a fixed joint")
             if j.type == "sliding":
                 self.beam(path + ("beam",), j.beam)
                 self.arc_length(path + ("s",), j.beam, j.s, "initial arc length s =")
+
+    def rotating(self, path, body, what):
+        if self.spec.bodies[body].point_mass:
+            raise Invalid(path, f'"{body}" is a point mass (translation only): {what} needs a rotation',
+                          "a rigid body with an inertia")
 
     def coordinate(self, path, j: S.CoordinateSpec):
         p = j.point
@@ -285,6 +300,11 @@ class Checker:
                 self.point(path + ("point",), f.point)
             elif f.type == "torque":
                 self.body(path + ("body",), f.body)
+                self.rotating(path + ("body",), f.body, "a torque")
+            elif f.type == "mass_proportional":
+                if f.item not in self.spec.beams and f.item not in self.spec.bodies:
+                    raise Invalid(path + ("item",), f'"{f.item}" is no beam or body',
+                                  f"the name of a beam or body: {_names({**self.spec.beams, **self.spec.bodies})}")
             else:
                 self.point(path + ("a",), f.a)
                 self.point(path + ("b",), f.b)

@@ -43,6 +43,7 @@ TABLES = [
     ('`[loads.NAME]` with `type = "point_force"`', S.PointForceSpec),
     ('`[loads.NAME]` with `type = "torque"`', S.TorqueSpec),
     ('`[loads.NAME]` with `type = "spring_damper"`', S.SpringDamperSpec),
+    ('`[loads.NAME]` with `type = "mass_proportional"`', S.MassProportionalSpec),
     ("`[initial]`", S.InitialSpec),
     ("`[statics]`", S.StaticsSpec),
     ("`[modal]`", S.ModalSpec),

@@ -164,14 +164,17 @@ class BeamSpec(Table):
                       doc="Rayleigh stiffness-proportional damping β (Eq. 11)")
     formulation: FormulationSpec = key(FormulationSpec(), doc="strain measures and quadrature")
     initial: BeamInitial = key(BeamInitial(), doc="initial shape and velocity")
+    gravity: bool = key(True, doc="whether gravity acts on this beam")
 
 
 # ----------------------------------------------------------------------------- bodies
 class BodySpec(Table):
-    """A rigid body (paper Eq. 14): coordinates x, y of its centre and angle θ."""
+    """A rigid body (paper Eq. 14): coordinates x, y of its centre and angle θ; or, with
+    point_mass = true, a point mass (translation only, no inertia, angle or points)."""
 
     mass: float = key(unit="kg", gt=0.0, allow_inf_nan=False, doc="mass m")
-    inertia: float = key(unit="kg·m²", gt=0.0, allow_inf_nan=False, doc="moment of inertia J about the centre")
+    inertia: Optional[float] = key(None, unit="kg·m²", gt=0.0, allow_inf_nan=False,
+                                   doc="moment of inertia J about the centre (required unless point_mass)")
     position: Optional[Vec2] = key(None, unit="m", doc="initial position of the centre (default [0, 0])")
     at: Optional[PointRef] = key(None, doc="instead of position: the centre starts at this point of a "
                                            "beam's initial shape or of a body declared earlier")
@@ -182,6 +185,9 @@ class BodySpec(Table):
                                             doc="initial angular velocity (default: not given, set by "
                                                 "the joints, else 0)")
     points: dict[str, Vec2] = key({}, unit="m", doc="named points in the body frame, e.g. { hook = [0, 0.5] }")
+    point_mass: bool = key(False, doc="a point mass (Exudyn's MassPoint2D): translation only; fixed joints, "
+                                      "torques and points away from the centre are refused")
+    gravity: bool = key(True, doc="whether gravity acts on this body")
 
 
 # ----------------------------------------------------------------------------- joints
@@ -305,7 +311,18 @@ class SpringDamperSpec(Table):
                                        doc="ℓ₀ (default: the initial distance)")
 
 
-Load = Annotated[Union[PointForceSpec, TorqueSpec, SpringDamperSpec], Field(discriminator="type")]
+class MassProportionalSpec(Table):
+    """A load m·a·f(t) on one beam or body only (Exudyn's LoadMassProportional): on a body
+    at its centre, on a beam the consistent load of ρA·a."""
+
+    type: Literal["mass_proportional"] = key(doc="load type")
+    item: str = key(doc="a beam's or body's name")
+    acceleration: Vec2 = key(unit="m/s²", doc="acceleration a")
+    time_function: Optional[TimeFunction] = key(None, doc="scale f(t) (default 1)")
+
+
+Load = Annotated[Union[PointForceSpec, TorqueSpec, SpringDamperSpec, MassProportionalSpec],
+                 Field(discriminator="type")]
 
 
 # ----------------------------------------------------------------------------- state, solvers

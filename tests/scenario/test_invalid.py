@@ -45,6 +45,14 @@ CASES = [
                                           'component = "y"'), "joints.c.point", '{ beam = "a", node = i } or { body = "b" }'),
     ("theta of a beam node", added('[joints.c]\ntype = "coordinate"\npoint = { beam = "arm", node = 1 }\n'
                                    'component = "theta"'), "joints.c.component", "x, y, slope_x, slope_y"),
+    ("fixed joint to a point mass", replaced(("mass = 1.0\ninertia = 0.1", "mass = 1.0\npoint_mass = true")),
+     "joints.tip.body", "a rigid body with an inertia"),
+    ("point mass with an inertia", replaced(("mass = 0.5\ninertia = 0.01", "mass = 0.5\ninertia = 0.01\npoint_mass = true")),
+     "bodies.trolley.inertia", "mass, position or at"),
+    ("body without inertia", replaced(("mass = 0.5\ninertia = 0.01", "mass = 0.5")), "bodies.trolley.inertia",
+     "a number > 0 [kg·m²]"),
+    ("mass-proportional load on a joint", added('[loads.g]\ntype = "mass_proportional"\nitem = "clamp"\n'
+                                                 'acceleration = [0.0, -1.0]'), "loads.g.item", "the name of a beam or body"),
     ("EA without EI", replaced(("E = 2e11\nA = 1e-4\nI = 1e-9\ndensity = 7800.0", "EA = 2e7\nmass = 7.8")),
      "beams.arm.section.EI", "EA [N] and EI [N·m²]"),
     ("missing joint type", replaced(('type = "clamp"\n', "")), "joints.clamp.type", '"clamp", "pin"'),
