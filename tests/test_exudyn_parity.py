@@ -282,3 +282,24 @@ def test_scenario_with_the_exudyn_items(tmp_path):
     assert isinstance(system.forces[0], BeamMassLoad)
     phi = np.asarray(system.constraint(state.q, 2.0))
     assert phi[5] == pytest.approx(-0.02, rel=1e-15)  # node 1 starts at y = 0, f(2) = 0.02
+
+
+# ----------------------------------------------------------------------------- 4. CSV precision
+def test_csv_round_trips_doubles_by_default(tmp_path):
+    """Default: every value reads back to the same double; ``precision`` digits otherwise."""
+    import csv
+    from ancf_jax.outputs import write_csv
+    values = np.array([0.1 + 0.2, -1.0 / 3.0, 6.02214076e23, 5e-324, 0.0, np.pi * 1e-9])
+    cols = {"t": np.arange(values.size, dtype=float), "v": values}
+    write_csv(tmp_path / "full.csv", cols)
+    write_csv(tmp_path / "short.csv", cols, precision=10)
+    with open(tmp_path / "full.csv") as f:
+        rows = list(csv.reader(f))
+    assert rows[0] == ["t", "v"]
+    assert np.array_equal(np.array([float(r[1]) for r in rows[1:]]), values)
+    with open(tmp_path / "short.csv") as f:
+        short = np.array([float(r[1]) for r in list(csv.reader(f))[1:]])
+    np.testing.assert_allclose(short, values, rtol=5e-10)
+    assert not np.array_equal(short, values)
+    with pytest.raises(ModelError, match="precision of CSV output must be an integer 1..17"):
+        write_csv(tmp_path / "bad.csv", cols, precision=0)

@@ -521,6 +521,9 @@ class OutputsSpec(Table):
     dt: Optional[float] = key(None, unit="s", gt=0.0, allow_inf_nan=False,
                               doc="sample interval (default every solver step)")
     columns: dict[str, Output] = key({}, doc="named output columns (the CSV header)")
+    precision: Optional[int] = key(None, ge=1, le=17, doc="significant digits of the CSV values (default: "
+                                                           "the shortest text that reads back to the same "
+                                                           "double, a full round trip)")
 
 
 # ----------------------------------------------------------------------------- fatigue
