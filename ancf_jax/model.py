@@ -34,6 +34,7 @@ from . import joints as J
 from . import points as P
 from .beam import Beam
 from .bodies import RigidBodies
+from .element.laws import check_law
 from .element.strain_energy import Formulation
 from .errors import ConstraintError, ModelError, VelocityProjectionWarning
 from .forces import BeamMassLoad, BodyMassLoad, PointForce, PointTorque, SpringDamper
@@ -101,6 +102,8 @@ class _BeamSpec:
     initial_nodes: Optional[np.ndarray]
     initial_velocities: Optional[np.ndarray]
     gravity: bool = True
+    axial_law: Any = None
+    bending_law: Any = None
 
 
 @dataclasses.dataclass
@@ -137,7 +140,8 @@ class Model:
 
     def add_beam(self, name: str, mesh: BeamMesh, section: Section, *, alpha=0.0, beta=0.0,
                  formulation: Formulation | None = None, initial_nodes=None,
-                 initial_velocities=None, gravity: bool = True) -> str:
+                 initial_velocities=None, gravity: bool = True, axial_law=None,
+                 bending_law=None) -> str:
         """Add a beam.
 
         Args:
@@ -151,6 +155,9 @@ class Model:
             initial_velocities: initial nodal velocities (n + 1, 4); default zero.
             gravity: whether the model's gravity acts on this beam (for a load on some
                 items only, see also :meth:`mass_proportional_load`).
+            axial_law, bending_law: material laws N(ε, ε̇), M(κ, κ̇) from
+                :mod:`ancf_jax.element.laws` (e.g. ``StrainRateDamped(d)``, Exudyn's
+                cable damping); None: linear elastic.
         """
         if not isinstance(mesh, BeamMesh):
             raise ModelError(f"mesh of beam {name!r} must be a BeamMesh (see ancf_jax.mesh)")
@@ -166,9 +173,15 @@ class Model:
                 raise ModelError(f"{label} of beam {name!r} must have shape {shape}, got {arr.shape}")
         alpha = check_nonnegative(f"alpha of beam {name!r}", alpha, "1/s")
         beta = check_nonnegative(f"beta of beam {name!r}", beta, "s")
+        axial_law = check_law(f"axial_law of beam {name!r}", axial_law)
+        bending_law = check_law(f"bending_law of beam {name!r}", bending_law)
+        if bending_law is not None and (formulation or Formulation()).curvature == "small_strain":
+            raise ModelError(f"bending_law of beam {name!r} needs curvature 'exact' or 'material', "
+                             "not 'small_strain'")
         self._claim(name, "beam")
         self._beams[name] = _BeamSpec(mesh, section, alpha, beta, formulation or Formulation(),
-                                      nodes0, vel0, _flag(f"gravity of beam {name!r}", gravity))
+                                      nodes0, vel0, _flag(f"gravity of beam {name!r}", gravity),
+                                      axial_law, bending_law)
         return name
 
     def add_body(self, name: str, *, mass, inertia, position=(0.0, 0.0), angle=0.0,
@@ -547,7 +560,8 @@ class Model:
                         raise ModelError(f"pad_to for beam {name!r} must be >= its {n} elements, got {target}")
                     mesh = pad(mesh, int(target))
             beams.append(Beam(mesh, spec.section, alpha=spec.alpha, beta=spec.beta,
-                              formulation=spec.formulation))
+                              formulation=spec.formulation, axial_law=spec.axial_law,
+                              bending_law=spec.bending_law))
             ref = np.asarray(mesh.reference_nodes)
             x0 = ref.copy()
             if spec.initial_nodes is not None:

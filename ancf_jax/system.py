@@ -232,7 +232,8 @@ class System(eqx.Module):
     def _beam_forces(self, q, v, with_elastic: bool):
         """Elastic forces −∂U/∂q and Rayleigh forces −(αM + βK)v of all beams, in one
         linearization of the elastic force per beam: ``jax.jvp`` of −∂U/∂e along the
-        nodal velocities returns the force (primal) and −K v (tangent) together."""
+        nodal velocities returns the force (primal) and −K v (tangent) together; plus the
+        rate parts of material laws (:meth:`ancf_jax.beam.Beam.dissipative_force`)."""
         elastic = jnp.zeros_like(q)
         damping = jnp.zeros_like(q)
         for i, b in enumerate(self.beams):
@@ -243,6 +244,8 @@ class System(eqx.Module):
             o = self.beam_offset(i)
             sl = slice(o, o + b.n_coordinates)
             damping = damping.at[sl].add(-b.alpha * m_v + b.beta * jnp.reshape(minus_kv, (-1,)))
+            if b.has_rate_law:  # rate parts of material laws (a dissipation)
+                damping = damping.at[sl].add(jnp.reshape(b.dissipative_force(nodes, vel), (-1,)))
             if with_elastic:
                 elastic = elastic.at[sl].add(jnp.reshape(f, (-1,)))
         return elastic, damping

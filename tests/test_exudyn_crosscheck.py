@@ -49,3 +49,11 @@ def test_m1_matches_exudyn(exudyn_process):
 
 def test_sliding_joint_term(exudyn_process):
     run_case(exudyn_process, "sliding_joint_term")
+
+
+def test_strain_rate_damping_element_matches_exudyn(exudyn_process):
+    run_case(exudyn_process, "strain_rate_damping_element")
+
+
+def test_strain_rate_damping_dynamics_matches_exudyn(exudyn_process):
+    run_case(exudyn_process, "strain_rate_damping_dynamics")

@@ -239,6 +239,8 @@ geometry = { type = "straight", length = 1.0 }
 elements = 2
 section = { EA = 1e8, EI = 100.0, mass_per_length = 0.1 }
 gravity = false
+axial_law = { type = "strain_rate_damped", damping = 2.0 }
+bending_law = { type = "tabulated", table = [[-1.0, -100.0], [0.0, 0.0], [1.0, 100.0]] }
 [bodies.bob]
 mass = 0.3
 position = [1.0, 0.0]
@@ -280,6 +282,9 @@ def test_scenario_with_the_exudyn_items(tmp_path):
     assert system.constraint_labels()[-1] == "bob.rotation[0]"
     assert float(system.bodies.inertia[0]) == 0.0
     assert isinstance(system.forces[0], BeamMassLoad)
+    beam = system.beams[0]
+    assert isinstance(beam.axial_law, laws.StrainRateDamped) and float(beam.axial_law.damping) == 2.0
+    assert isinstance(beam.bending_law, laws.Tabulated) and beam.has_rate_law
     phi = np.asarray(system.constraint(state.q, 2.0))
     assert phi[5] == pytest.approx(-0.02, rel=1e-15)  # node 1 starts at y = 0, f(2) = 0.02
 
@@ -303,3 +308,112 @@ def test_csv_round_trips_doubles_by_default(tmp_path):
     assert not np.array_equal(short, values)
     with pytest.raises(ModelError, match="precision of CSV output must be an integer 1..17"):
         write_csv(tmp_path / "bad.csv", cols, precision=0)
+
+
+# ----------------------------------------------------------------------------- 5. material laws
+from ancf_jax.element import laws  # noqa: E402
+from ancf_jax.element.strain_energy import Formulation  # noqa: E402
+
+ENGINEERING = Formulation(axial_strain="engineering", curvature="material")
+
+
+def test_bilinear_bar_under_axial_load_matches_the_closed_form():
+    """A clamped bar with a bilinear axial law (k_t = 4 k_c) under an axial tip load ±P:
+    the engineering strain is uniform, ε = P/k_t in tension and −P/k_c in compression,
+    so the tip moves by L·ε (exact for the cubic element; statics to 1e-12)."""
+    import equinox as eqx
+    from ancf_jax.model import Model, node
+    from ancf_jax.statics import solve_static
+    k_t, k_c, p = 4.0e6, 1.0e6, 2.0e3
+    m = Model(gravity=(0.0, 0.0))
+    m.add_beam("bar", mesh.straight((0, 0), (1, 0), L_C, 2), Section.from_stiffness(EA_C, EI_C, 0.1),
+               formulation=ENGINEERING, axial_law=laws.Bilinear(k_t, k_c))
+    m.clamp("support", "bar", 0, mode="exudyn")  # the axial stretch at the clamp is free
+    m.point_force("load", node("bar", -1), (p, 0.0))
+    system, state = m.build()
+    for sign, k in ((1.0, k_t), (-1.0, k_c)):
+        loaded = eqx.tree_at(lambda s: s.forces[0].force, system, jnp.array([sign * p, 0.0]))
+        sol = solve_static(loaded, state, load_steps=2, tolerance=1e-12)
+        tip = np.asarray(loaded.beam_nodes(sol.state.q, 0))[-1]
+        assert tip[0] - L_C == pytest.approx(sign * p / k * L_C, rel=1e-10)
+        assert abs(tip[1]) < 1e-14
+        n = float(loaded.beams[0].axial_force(loaded.beam_nodes(sol.state.q, 0), 0.4))
+        assert n == pytest.approx(sign * p, rel=1e-10)
+
+
+def test_tabulated_law_energy_is_the_exact_integral_of_the_table():
+    """W(γ) = ∫₀^γ N for the piecewise-linear table (against scipy's quad), W'(γ) = N,
+    extended linearly outside the table; a table without the stress-free state is refused."""
+    from scipy.integrate import quad
+    strains = np.array([-0.02, -0.005, 0.0, 0.01, 0.03])
+    forces = np.array([-5.0e3, -2.0e3, 0.0, 6.0e3, 1.0e4])
+    law = laws.Tabulated(strains, forces)
+
+    def n_of(g):
+        if g < strains[0]:
+            return forces[0] + (g - strains[0]) * (forces[1] - forces[0]) / (strains[1] - strains[0])
+        if g > strains[-1]:
+            return forces[-1] + (g - strains[-1]) * (forces[-1] - forces[-2]) / (strains[-1] - strains[-2])
+        return np.interp(g, strains, forces)
+
+    grid = np.array([-0.03, -0.02, -0.011, 0.0, 0.004, 0.02, 0.05])
+    w = np.asarray(eqx.filter_jit(lambda lw, g: lw.energy(g, 1.0))(law, jnp.asarray(grid)))
+    n = np.asarray(eqx.filter_jit(lambda lw, g: jax.vmap(jax.grad(lw.energy), (0, None))(g, 1.0))(
+        law, jnp.asarray(grid)))
+    for g, wi, ni in zip(grid, w, n):
+        pts = [s for s in strains if min(0, g) < s < max(0, g)]
+        assert wi == pytest.approx(quad(n_of, 0.0, g, points=pts or None)[0], rel=1e-12, abs=1e-15)
+        assert ni == pytest.approx(n_of(g), rel=1e-12, abs=1e-12)
+    with pytest.raises(ModelError, match="force at zero strain must be 0"):
+        laws.Tabulated([-0.01, 0.01], [0.0, 1.0])
+    with pytest.raises(ModelError, match="increase with the strain"):
+        laws.Tabulated([-0.01, 0.0, 0.01], [1.0, 0.0, -1.0])
+
+
+def _damped_beam(d_axial=3.0, d_bending=0.02, n=2):
+    return Beam(mesh.straight((0, 0), (1, 0), L_C, n), Section.from_stiffness(EA_C, EI_C, 0.1),
+                formulation=ENGINEERING, axial_law=laws.StrainRateDamped(d_axial),
+                bending_law=laws.StrainRateDamped(d_bending))
+
+
+def test_strain_rate_damping_dissipates_d_eps_dot_squared():
+    """Rate terms are a dissipation: under a uniform stretching rate ε̇ of a straight bar
+    (ṙ = ε̇ x, ṙ' = ε̇ e_x) the dissipated power −v·Q_d is d_A ε̇² L; under a uniform
+    curvature rate κ̇ of the straight beam (ṙ_y = κ̇ x²/2, ṙ'_y = κ̇ x) it is d_K κ̇² L.
+    The strain energy does not depend on the rates."""
+    beam = _damped_beam()
+    nodes = beam.mesh.reference_nodes
+    x = np.asarray(nodes)[:, 0]
+    power = jax.jit(lambda b, v: -jnp.sum(v * b.dissipative_force(nodes, v)))
+    rate = 0.7
+    stretch = jnp.asarray(np.stack([rate * x, 0 * x, rate + 0 * x, 0 * x], axis=1))
+    bend = jnp.asarray(np.stack([0 * x, rate * x**2 / 2, 0 * x, rate * x], axis=1))
+    assert float(power(beam, stretch)) == pytest.approx(3.0 * rate**2 * L_C, rel=1e-13)
+    assert float(power(beam, bend)) == pytest.approx(0.02 * rate**2 * L_C, rel=1e-13)
+    plain = Beam(beam.mesh, beam.section, formulation=ENGINEERING)
+    deformed = _deformed(beam)
+    assert float(beam.strain_energy(deformed)) == float(plain.strain_energy(deformed))
+
+
+def test_rate_law_newton_matrix_is_the_derivative_of_the_forces():
+    """element_tangent of a beam with strain-rate laws equals central differences of the
+    element's resisting force ∂U/∂e + f_d(e, ė) along (δe, c_v δe) (relative 1e-7)."""
+    from ancf_jax.element.strain_energy import dissipative_force, strain_energy
+    beam = _damped_beam(n=1)
+    nodes = _deformed(beam, 3)
+    vel = jnp.asarray(np.random.default_rng(4).standard_normal(nodes.shape))
+    c_v = 40.0
+    k = np.asarray(eqx.filter_jit(lambda b: b.element_tangent(nodes, vel, c_v))(beam))[0]
+    e, ed = jnp.ravel(nodes), jnp.ravel(vel)
+    er, l = beam.mesh.reference_elements[0], beam.mesh.element_lengths[0]
+    ea, ei = beam.section.axial_stiffness, beam.section.bending_stiffness
+
+    @eqx.filter_jit
+    def force(x, xd):
+        return (jax.grad(strain_energy)(x, er, l, ea, ei, ENGINEERING, beam.axial_law, beam.bending_law)
+                + dissipative_force(x, xd, er, l, ea, ei, ENGINEERING, beam.axial_law, beam.bending_law))
+
+    h = 1e-6
+    fd = np.stack([(np.asarray(force(e + h * d, ed + c_v * h * d)) - np.asarray(force(e - h * d, ed - c_v * h * d)))
+                   / (2 * h) for d in np.eye(8)], axis=1)
+    np.testing.assert_allclose(k, fd, rtol=0, atol=1e-7 * np.abs(k).max())

@@ -15,6 +15,7 @@ import numpy as np
 
 from .. import mesh as _mesh
 from ..beam import Beam
+from ..element import laws
 from ..element.strain_energy import Formulation
 from ..errors import ModelError
 from ..model import Model, beam_point, body_point, ground, node
@@ -82,6 +83,20 @@ def section_of(beam: S.BeamSpec, length: float) -> Section:
     return Section(sec.E, area, inertia, mpl, fibre_distance=fibre)
 
 
+def law_of(spec):
+    """The :mod:`ancf_jax.element.laws` law of a law table (None: none given)."""
+    if spec is None:
+        return None
+    if spec.type == "linear":
+        return laws.LinearElastic()
+    if spec.type == "strain_rate_damped":
+        return laws.StrainRateDamped(spec.damping)
+    if spec.type == "bilinear":
+        return laws.Bilinear(spec.tension, spec.compression)
+    table = np.asarray(spec.table, float)
+    return laws.Tabulated(table[:, 0], table[:, 1])
+
+
 def nominal_length(beam: S.BeamSpec, mesh: _mesh.BeamMesh) -> float:
     """L [m]: the given length of a straight beam, else the sum of element lengths."""
     if isinstance(beam.geometry, S.Straight):
@@ -126,7 +141,8 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
                                       bending_quadrature=tuple(f.bending_quadrature))
             nodes, vel = initial_nodes(b, mesh, length)
             m.add_beam(name, mesh, section, alpha=b.alpha, beta=b.beta, formulation=formulation,
-                       initial_nodes=nodes, initial_velocities=vel, gravity=b.gravity)
+                       initial_nodes=nodes, initial_velocities=vel, gravity=b.gravity,
+                       axial_law=law_of(b.axial_law), bending_law=law_of(b.bending_law))
             shapes[name] = (Beam(mesh, section), np.asarray(mesh.reference_nodes) if nodes is None else nodes)
 
     poses: dict[str, tuple[float, float, float]] = {}

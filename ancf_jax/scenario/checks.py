@@ -15,6 +15,7 @@ import re
 import numpy as np
 
 from . import schema as S
+from ..errors import ModelError
 from .errors import Invalid
 from .types import TimeFunctionSpec
 from .geometry import element_count, first_node, reference_length
@@ -172,11 +173,29 @@ class Checker:
             self.elements[name] = element_count(b)
             self.lengths[name] = reference_length(g, self.elements[name])
             self.section(path + ("section",), b.section)
+            self.laws(path, b)
             if b.formulation.curvature == "small_strain" and not isinstance(g, S.Straight):
                 raise Invalid(path + ("formulation", "curvature"),
                               "small_strain (Eq. 17) needs a straight reference geometry",
                               '"exact" or "material" for a curved beam')
             self.initial(path + ("initial",), name, b)
+
+    def laws(self, path, b: S.BeamSpec):
+        from ..element.laws import Tabulated
+        for key in ("axial_law", "bending_law"):
+            law = getattr(b, key)
+            if law is None:
+                continue
+            if key == "bending_law" and b.formulation.curvature == "small_strain":
+                raise Invalid(path + (key,), "a bending law needs the exact or material curvature",
+                              'formulation.curvature = "exact" or "material", or no bending_law')
+            if law.type == "tabulated":
+                table = np.asarray(law.table, float)
+                try:
+                    Tabulated(table[:, 0], table[:, 1])
+                except ModelError as err:
+                    raise Invalid(path + (key, "table"), str(err).removeprefix("tabulated law: "),
+                                  "at least 2 rows [strain, force], both increasing, through [0, 0]") from None
 
     def section(self, path, sec: S.SectionSpec):
         self.exclusive(path, sec, ("mass_per_length", "density", "mass"), required=True)

@@ -137,6 +137,41 @@ class FormulationSpec(Table):
     bending_quadrature: Quadrature = key(("gauss", 3), doc="[kind, points] of the bending term")
 
 
+class LinearLawSpec(Table):
+    """Linear elastic: N = EA ε (axial), M = EI (κ − κ₀) (bending), the default."""
+
+    type: Literal["linear"] = key(doc="law type")
+
+
+class StrainRateDampedLawSpec(Table):
+    """Linear elastic with strain-rate damping, N = EA ε + d ε̇ (Exudyn's axialDamping
+    and bendingDamping); the rate term is a dissipation."""
+
+    type: Literal["strain_rate_damped"] = key(doc="law type")
+    damping: float = key(unit="N·s or N·m²·s", ge=0.0, allow_inf_nan=False, doc="d (d_A axial, d_K bending)")
+
+
+class BilinearLawSpec(Table):
+    """Different stiffness in tension and compression: N = k_t γ (γ ≥ 0), k_c γ (γ < 0);
+    the section's EA or EI is not used."""
+
+    type: Literal["bilinear"] = key(doc="law type")
+    tension: float = key(unit="N or N·m²", gt=0.0, allow_inf_nan=False, doc="k_t")
+    compression: float = key(unit="N or N·m²", gt=0.0, allow_inf_nan=False, doc="k_c")
+
+
+class TabulatedLawSpec(Table):
+    """A nonlinear elastic law N(γ) piecewise linear through [γ, N] rows (increasing, through
+    [0, 0]), extended with the end slopes; the energy is its exact integral."""
+
+    type: Literal["tabulated"] = key(doc="law type")
+    table: Points2 = key(unit="-, N or 1/m, N·m", doc="rows [strain, force] (axial) or [curvature change, moment]")
+
+
+Law = Annotated[Union[LinearLawSpec, StrainRateDampedLawSpec, BilinearLawSpec, TabulatedLawSpec],
+                Field(discriminator="type")]
+
+
 class BeamInitial(Table):
     """Initial shape and velocity of a beam (default: its stress-free reference, at rest)."""
 
@@ -165,6 +200,9 @@ class BeamSpec(Table):
     formulation: FormulationSpec = key(FormulationSpec(), doc="strain measures and quadrature")
     initial: BeamInitial = key(BeamInitial(), doc="initial shape and velocity")
     gravity: bool = key(True, doc="whether gravity acts on this beam")
+    axial_law: Optional[Law] = key(None, doc="material law N(ε, ε̇) (default linear: N = EA ε)")
+    bending_law: Optional[Law] = key(None, doc="material law M(κ, κ̇) (default linear: M = EI (κ − κ₀); "
+                                               "others need curvature exact or material)")
 
 
 # ----------------------------------------------------------------------------- bodies

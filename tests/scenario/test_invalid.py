@@ -53,6 +53,11 @@ CASES = [
      "a number > 0 [kg·m²]"),
     ("mass-proportional load on a joint", added('[loads.g]\ntype = "mass_proportional"\nitem = "clamp"\n'
                                                  'acceleration = [0.0, -1.0]'), "loads.g.item", "the name of a beam or body"),
+    ("tabulated law off the origin", replaced(("alpha = 0.1\n", 'alpha = 0.1\naxial_law = { type = "tabulated", '
+                                                                  'table = [[-0.01, -1.0], [0.01, 3.0]] }\n')),
+     "beams.arm.axial_law.table", "through [0, 0]"),
+    ("unknown law", replaced(("alpha = 0.1\n", 'alpha = 0.1\nbending_law = { type = "plastic" }\n')),
+     "beams.arm.bending_law.type", '"linear", "strain_rate_damped"'),
     ("EA without EI", replaced(("E = 2e11\nA = 1e-4\nI = 1e-9\ndensity = 7800.0", "EA = 2e7\nmass = 7.8")),
      "beams.arm.section.EI", "EA [N] and EI [N·m²]"),
     ("missing joint type", replaced(('type = "clamp"\n', "")), "joints.clamp.type", '"clamp", "pin"'),
