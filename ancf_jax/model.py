@@ -155,9 +155,9 @@ class Model:
             initial_velocities: initial nodal velocities (n + 1, 4); default zero.
             gravity: whether the model's gravity acts on this beam (for a load on some
                 items only, see also :meth:`mass_proportional_load`).
-            axial_law, bending_law: material laws N(ε, ε̇), M(κ, κ̇) from
-                :mod:`ancf_jax.element.laws` (e.g. ``StrainRateDamped(d)``, Exudyn's
-                cable damping); None: linear elastic.
+            axial_law: material law N(ε, ε̇) from :mod:`ancf_jax.element.laws` (e.g.
+                ``StrainRateDamped(d)``, Exudyn's cable damping); None: linear elastic.
+            bending_law: material law M(κ, κ̇), likewise.
         """
         if not isinstance(mesh, BeamMesh):
             raise ModelError(f"mesh of beam {name!r} must be a BeamMesh (see ancf_jax.mesh)")

@@ -186,10 +186,10 @@ def strain_energy(e, e_ref, length, axial_stiffness, bending_stiffness,
         axial_stiffness: EA [N].
         bending_stiffness: EI [N·m²].
         formulation: strain measures and quadrature rules.
-        axial_law, bending_law: elastic energy densities W(γ) of
-            :mod:`ancf_jax.element.laws` in place of ½ EA ε² and ½ EI (κ − κ₀)²;
-            None: linear elastic (Eq. 8 as printed). A bending law needs the
-            ``"exact"`` or ``"material"`` curvature.
+        axial_law: a law of :mod:`ancf_jax.element.laws` whose energy density W(ε)
+            replaces ½ EA ε²; None: linear elastic (Eq. 8 as printed).
+        bending_law: likewise for ½ EI (κ − κ₀)²; needs the ``"exact"`` or
+            ``"material"`` curvature.
 
     Returns:
         Scalar energy [J].
