@@ -54,6 +54,7 @@ from ancf_jax import mesh as _mesh
 from ancf_jax import points as P
 from ancf_jax.element.quadrature import rule as _rule
 from ancf_jax.element.laws import LinearElastic, StrainRateDamped
+from ancf_jax.interop.exudyn import CABLE_RULES
 from ancf_jax.element.strain_energy import Formulation
 from ancf_jax.errors import ModelError
 from ancf_jax.model import Model, node
@@ -74,11 +75,7 @@ MODELS = ("M1", "M2", "H1")
 #: Exudyn 1.13.6's elastic force of a randomly deformed element to 1e-15 (relative)
 #: (``tests/test_exudyn_crosscheck.py::test_exudyn_quadrature_rules``); the source
 #: comments call them "A9-B5", "A7-B3" and "A4-B3" (polynomial orders).
-EXUDYN_RULES = {
-    0: (("gauss", 5), ("gauss", 3)),    # Exudyn default
-    1: (("gauss", 4), ("gauss", 2)),
-    2: (("lobatto", 3), ("gauss", 2)),
-}
+EXUDYN_RULES = CABLE_RULES  # 0 is Exudyn's default
 
 #: H1, the very flexible pendulum (docs/models.md), SI. No ancf_jax builder exists yet, so
 #: the parameters live here (the lead may move them to ``ancf_jax.models``).

@@ -44,7 +44,7 @@ def exudyn_tip():
         mbs.AddObject(CoordinateConstraint(markerNumbers=[
             ground, mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[0], coordinate=c))]))
     tip = mbs.AddNode(NodePoint2D(referenceCoordinates=[L, 0]))
-    bob = mbs.AddObject(MassPoint2D(nodeNumber=tip, physicsMass=M_TIP))
+    bob = mbs.AddObject(MassPoint2D(nodeNumber=tip, mass=M_TIP))
     mbs.AddLoad(LoadMassProportional(markerNumber=mbs.AddMarker(MarkerBodyMass(bodyNumber=bob)),
                                      loadVector=[0, G, 0]))
     mbs.AddObject(RevoluteJoint2D(markerNumbers=[mbs.AddMarker(MarkerNodePosition(nodeNumber=nodes[-1])),

@@ -57,3 +57,7 @@ def test_strain_rate_damping_element_matches_exudyn(exudyn_process):
 
 def test_strain_rate_damping_dynamics_matches_exudyn(exudyn_process):
     run_case(exudyn_process, "strain_rate_damping_dynamics")
+
+
+def test_from_exudyn_matches_exudyn(exudyn_process):
+    run_case(exudyn_process, "from_exudyn_dynamics")
