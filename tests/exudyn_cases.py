@@ -260,7 +260,8 @@ def _exudyn_mechanism(extra=None):
 def from_exudyn_dynamics():
     """from_exudyn of the mechanism of :func:`_exudyn_mechanism` and Exudyn's own run,
     0.2 s at h = 1 ms, ρ∞ = 0.9, index 3, full Newton: the point mass and the rigid body
-    (x, y, θ) agree to 1e-9 (m, rad). Untranslatable items raise, naming the item."""
+    (x, y, θ) agree to 1e-9 (m, rad) (measured 3.8e-12 and 4.4e-12: Newton tolerances).
+    Untranslatable items raise, naming the item."""
     from ancf_jax.errors import ModelError
     from ancf_jax.interop.exudyn import from_exudyn
     from ancf_jax.simulation import simulate

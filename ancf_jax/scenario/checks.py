@@ -372,6 +372,11 @@ class Checker:
             path = ("outputs", "columns", name)
             if o.type in ("node", "point", "stress"):
                 self.beam(path + ("beam",), o.beam)
+            if o.type == "stress":
+                sec = self.spec.beams[o.beam].section
+                if sec.EA is not None and sec.E is None:
+                    raise Invalid(path, f'a stress needs Young\'s modulus: beam "{o.beam}" has EA and EI only',
+                                  f"key E in beams.{o.beam}.section (or no stress output)")
             if o.type == "node":
                 self.node_index(path + ("node",), o.beam, o.node)
             elif o.type == "point":

@@ -58,6 +58,8 @@ CASES = [
      "beams.arm.axial_law.table", "through [0, 0]"),
     ("unknown law", replaced(("alpha = 0.1\n", 'alpha = 0.1\nbending_law = { type = "plastic" }\n')),
      "beams.arm.bending_law.type", '"linear", "strain_rate_damped"'),
+    ("stress of a section without E", replaced(("E = 2e11\nA = 1e-4\nI = 1e-9\ndensity = 7800.0", "EA = 2e7\nEI = 200.0\nmass = 7.8"))
+     + '\nsig = { type = "stress", beam = "arm", s = 0.2 }', "outputs.columns.sig", "key E in beams.arm.section"),
     ("EA without EI", replaced(("E = 2e11\nA = 1e-4\nI = 1e-9\ndensity = 7800.0", "EA = 2e7\nmass = 7.8")),
      "beams.arm.section.EI", "EA [N] and EI [N·m²]"),
     ("missing joint type", replaced(('type = "clamp"\n', "")), "joints.clamp.type", '"clamp", "pin"'),
