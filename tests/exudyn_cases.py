@@ -260,8 +260,8 @@ def _exudyn_mechanism(extra=None):
 def from_exudyn_dynamics():
     """from_exudyn of the mechanism of :func:`_exudyn_mechanism` and Exudyn's own run,
     0.2 s at h = 1 ms, ρ∞ = 0.9, index 3, full Newton: the point mass and the rigid body
-    (x, y, θ) agree to 1e-9 (m, rad) (measured 3.8e-12 and 4.4e-12: Newton tolerances).
-    Untranslatable items raise, naming the item."""
+    (x, y, θ) agree to 1e-9 (m, rad) (measured 3.8e-12 and 4.4e-12: Newton tolerances); the statics of the same
+    mechanism agree to 1e-9 (measured 5.5e-14). Untranslatable items raise, naming the item."""
     from ancf_jax.errors import ModelError
     from ancf_jax.interop.exudyn import from_exudyn
     from ancf_jax.simulation import simulate
@@ -285,6 +285,30 @@ def from_exudyn_dynamics():
           f"{np.max(np.abs(box - ref_box)):.3g} (m, rad)")
     assert np.max(np.abs(tip - ref_tip)) < 1e-9
     assert np.max(np.abs(box - ref_box)) < 1e-9
+
+    # statics of the same mechanism: Exudyn's SolveStatic and ancf_jax's solve_static,
+    # 10 equal load steps from the reference, full Newton in both
+    from ancf_jax.statics import solve_static
+    mbs_s, sensors_s = _exudyn_mechanism()
+    ss = exu.SimulationSettings()
+    ss.solution.file.write = False
+    ss.staticSolver.verboseMode = 0
+    ss.staticSolver.numberOfLoadSteps = 10
+    ss.staticSolver.adaptiveStep = False
+    ss.staticSolver.newton.relativeTolerance = 1e-10
+    ss.staticSolver.newton.absoluteTolerance = 1e-14
+    ss.staticSolver.newton.useModifiedNewton = False
+    ss.staticSolver.newton.maxIterations = 50
+    exu.SolveStatic(mbs_s, ss)
+    static_tip, static_box = (np.asarray(mbs_s.GetSensorValues(s)) for s in sensors_s)
+    sol = solve_static(system, state, load_steps=10, tolerance=1e-12)
+    q = np.asarray(sol.state.q)
+    o_bob, o_box = (system.body_offset(system.body_names.index(b)) for b in ("bob", "box"))
+    d_tip = np.max(np.abs(q[o_bob:o_bob + 2] - np.array([1.2, 0.1]) - static_tip))
+    d_box = np.max(np.abs(q[o_box:o_box + 3] - np.array([0.5, -0.2, 0.1]) - static_box))
+    print(f"from_exudyn statics: point mass {d_tip:.3g} m, rigid body {d_box:.3g} (m, rad); "
+          f"tip sags {-static_tip[1]:.3g} m")
+    assert -static_tip[1] > 1e-2 and d_tip < 1e-9 and d_box < 1e-9
 
     def cartesian(mbs, nodes, cables):
         from exudyn.itemInterface import CartesianSpringDamper, MarkerNodePosition
