@@ -61,3 +61,7 @@ def test_strain_rate_damping_dynamics_matches_exudyn(exudyn_process):
 
 def test_from_exudyn_matches_exudyn(exudyn_process):
     run_case(exudyn_process, "from_exudyn_dynamics")
+
+
+def test_from_exudyn_eigenvalues_match_exudyn(exudyn_process):
+    run_case(exudyn_process, "from_exudyn_eigenvalues")
