@@ -97,6 +97,8 @@ class Checker:
                 raise Invalid(path + ("point",), "give local or point, not both", POINT_FORMS)
             if ref.point is not None:
                 self.body_point(path + ("point",), ref.body, ref.point)
+            if ref.local is not None and any(ref.local):
+                self.rotating(path + ("local",), ref.body, "a body point away from the centre")
         elif kind == "beam":
             self.beam(path + ("beam",), ref.beam)
             if (ref.node is None) == (ref.s is None):
@@ -289,6 +291,10 @@ class Checker:
                 self.body(path + ("body",), j.body)
             if j.type == "fixed":
                 self.rotating(path + ("body",), j.body, "a fixed joint")
+            if j.type == "prescribed_body" and j.coordinate == "theta":
+                self.rotating(path + ("body",), j.body, "a prescribed theta")
+            if j.type == "sliding" and any(j.local):
+                self.rotating(path + ("local",), j.body, "a sliding point away from the centre")
             if j.type == "sliding":
                 self.beam(path + ("beam",), j.beam)
                 self.arc_length(path + ("s",), j.beam, j.s, "initial arc length s =")
@@ -311,6 +317,8 @@ class Checker:
             raise Invalid(path + ("component",), f'"{j.component}" is not a coordinate of a '
                           f'{"beam node" if node else "body"}', ", ".join(allowed))
         self.exclusive(path, j, ("value", "function"))
+        if body and j.component == "theta":
+            self.rotating(path + ("point", "body"), p.body, "a constrained theta")
 
     def loads(self):
         for name, f in self.spec.loads.items():

@@ -47,6 +47,9 @@ CASES = [
                                    'component = "theta"'), "joints.c.component", "x, y, slope_x, slope_y"),
     ("fixed joint to a point mass", replaced(("mass = 1.0\ninertia = 0.1", "mass = 1.0\npoint_mass = true")),
      "joints.tip.body", "a rigid body with an inertia"),
+    ("local point of a point mass", replaced(("mass = 0.5\ninertia = 0.01", "mass = 0.5\npoint_mass = true"))
+     .replace("[solver]", '[joints.r]\ntype = "revolute"\na = { body = "trolley", local = [0.1, 0.0] }\n'
+              'b = { ground = [0.0, 0.0] }\n\n[solver]'), "joints.r.a.local", "a rigid body with an inertia"),
     ("point mass with an inertia", replaced(("mass = 0.5\ninertia = 0.01", "mass = 0.5\ninertia = 0.01\npoint_mass = true")),
      "bodies.trolley.inertia", "mass, position or at"),
     ("body without inertia", replaced(("mass = 0.5\ninertia = 0.01", "mass = 0.5")), "bodies.trolley.inertia",
