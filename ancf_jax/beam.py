@@ -20,7 +20,8 @@ import numpy as np
 
 from .element import mass as element_mass
 from .element.shape_functions import position as _position, slope as _slope
-from .element.strain_energy import Formulation, strain_energy
+from .element import laws as _laws
+from .element.strain_energy import Formulation, axial_strain as _axial_strain, dissipative_force as _dissipative, strain_energy
 from .element.stress import axial_force as _axial_force, bending_stress
 from .errors import ModelError
 from .linalg import BlockTridiagonal
@@ -48,6 +49,9 @@ class Beam(eqx.Module):
         formulation: strain measures and quadrature (static).
         rate_stiffness: whether Newton matrices include the β-rate term β ∂(K ė)/∂e
             (static; default: where β ≠ 0 at construction). See :meth:`element_tangent`.
+        axial_law, bending_law: material laws N(ε, ε̇) and M(κ, κ̇)
+            (:mod:`ancf_jax.element.laws`); None (default): linear elastic with the
+            section's EA and EI, through the unchanged energy of Eq. 8.
     """
 
     mesh: BeamMesh
@@ -56,15 +60,22 @@ class Beam(eqx.Module):
     beta: jnp.ndarray
     formulation: Formulation = eqx.field(static=True)
     rate_stiffness: bool = eqx.field(static=True)
+    axial_law: _laws.AbstractLaw | None = None
+    bending_law: _laws.AbstractLaw | None = None
 
     def __init__(self, mesh: BeamMesh, section: Section, *, alpha=0.0, beta=0.0,
-                 formulation: Formulation | None = None, rate_stiffness: bool | None = None):
+                 formulation: Formulation | None = None, rate_stiffness: bool | None = None,
+                 axial_law: _laws.AbstractLaw | None = None, bending_law: _laws.AbstractLaw | None = None):
         self.mesh = mesh
         self.section = section
         self.alpha = jnp.asarray(check_nonnegative("alpha (Rayleigh, mass-proportional)", alpha, "1/s"), float)
         self.beta = jnp.asarray(check_nonnegative("beta (Rayleigh, stiffness-proportional)", beta, "s"), float)
         self.formulation = Formulation() if formulation is None else formulation
         self.rate_stiffness = _maybe_nonzero(self.beta) if rate_stiffness is None else bool(rate_stiffness)
+        self.axial_law = _laws.check_law("axial_law", axial_law)
+        self.bending_law = _laws.check_law("bending_law", bending_law)
+        if bending_law is not None and self.formulation.curvature == "small_strain":
+            raise ModelError("a bending law needs curvature 'exact' or 'material', not 'small_strain'")
         if self.formulation.curvature == "small_strain":
             ref = jax.device_get(mesh.reference_nodes)
             n = int(mesh.n_elements)
@@ -89,7 +100,8 @@ class Beam(eqx.Module):
         e_ref = self.mesh.reference_elements
         ea = self.section.axial_stiffness
         ei = self.section.bending_stiffness
-        u = jax.vmap(lambda ee, er, l: strain_energy(ee, er, l, ea, ei, self.formulation))(
+        u = jax.vmap(lambda ee, er, l: strain_energy(ee, er, l, ea, ei, self.formulation,
+                                                     self.axial_law, self.bending_law))(
             e, e_ref, self.mesh.element_lengths)
         return jnp.where(self.mesh.active, u, 0.0)
 
@@ -108,7 +120,8 @@ class Beam(eqx.Module):
         ea = self.section.axial_stiffness
         ei = self.section.bending_stiffness
         h = jax.vmap(jax.hessian(
-            lambda ee, er, l: strain_energy(ee, er, l, ea, ei, self.formulation)))(
+            lambda ee, er, l: strain_energy(ee, er, l, ea, ei, self.formulation,
+                                            self.axial_law, self.bending_law)))(
             e, e_ref, self.mesh.element_lengths)
         return jnp.where(self.mesh.active[:, None, None], h, 0.0)
 
@@ -131,6 +144,8 @@ class Beam(eqx.Module):
         loop, 13.5 with the term always computed, 7 without it). The mass-proportional
         part α M ė is linear and enters with the mass (:func:`ancf_jax.dae.iteration_matrix`).
         """
+        if self.has_rate_law:
+            return self._rate_law_tangent(nodes, velocities, damping_coef)
         if not self.rate_stiffness:
             return self.element_stiffness(nodes) * (1.0 + damping_coef * self.beta)
         e = self.mesh.element_coordinates(nodes)
@@ -140,12 +155,61 @@ class Beam(eqx.Module):
         ei = self.section.bending_stiffness
 
         def grad_u(x, er, l):
-            return jax.grad(strain_energy)(x, er, l, ea, ei, self.formulation)
+            return jax.grad(strain_energy)(x, er, l, ea, ei, self.formulation, self.axial_law,
+                                           self.bending_law)
 
         def one(ee, eed, er, l):
             def f(x):
                 g, kw = jax.jvp(lambda y: grad_u(y, er, l), (x,), (eed + damping_coef * (x - ee),))
                 return g + self.beta * kw
+            return jax.jacfwd(f)(ee)
+
+        h = jax.vmap(one)(e, ed, e_ref, self.mesh.element_lengths)
+        return jnp.where(self.mesh.active[:, None, None], h, 0.0)
+
+    # ------------------------------------------------------------------ rate laws
+    @property
+    def has_rate_law(self) -> bool:
+        """Whether a material law of the beam has a rate part (static)."""
+        return any(law is not None and law.has_rate for law in (self.axial_law, self.bending_law))
+
+    def _element_dissipative(self, e, e_dot, e_ref, length):
+        return _dissipative(e, e_dot, e_ref, length, self.section.axial_stiffness,
+                            self.section.bending_stiffness, self.formulation, self.axial_law,
+                            self.bending_law)
+
+    def dissipative_force(self, nodes, velocities):
+        """Generalized force of the rate parts of the laws, −∫ (N_d δε + M_d δκ) g dx,
+        shape (n_max + 1, 4) [N, N·m] (acting on the coordinates; zero without a rate
+        law). See :func:`ancf_jax.element.strain_energy.dissipative_force`."""
+        if not self.has_rate_law:
+            return jnp.zeros_like(nodes)
+        f = jax.vmap(self._element_dissipative)(
+            self.mesh.element_coordinates(nodes), self.mesh.element_coordinates(velocities),
+            self.mesh.reference_elements, self.mesh.element_lengths)
+        f = jnp.where(self.mesh.active[:, None], f, 0.0)
+        out = jnp.zeros((self.n_nodes, 4))
+        return -out.at[:-1].add(f[:, :4]).at[1:].add(f[:, 4:])
+
+    def _rate_law_tangent(self, nodes, velocities, damping_coef):
+        """:meth:`element_tangent` of a beam with a rate law: one ``jax.jacfwd`` per
+        element of f(e, ė) = ∂U/∂e + β K(e) ė + f_d(e, ė) along (δe, c_v δe), with f_d
+        the rate parts' resisting force (the β-rate term always included)."""
+        e = self.mesh.element_coordinates(nodes)
+        ed = self.mesh.element_coordinates(velocities)
+        e_ref = self.mesh.reference_elements
+        ea = self.section.axial_stiffness
+        ei = self.section.bending_stiffness
+
+        def grad_u(x, er, l):
+            return jax.grad(strain_energy)(x, er, l, ea, ei, self.formulation, self.axial_law,
+                                           self.bending_law)
+
+        def one(ee, eed, er, l):
+            def f(x):
+                x_dot = eed + damping_coef * (x - ee)
+                g, kw = jax.jvp(lambda y: grad_u(y, er, l), (x,), (x_dot,))
+                return g + self.beta * kw + self._element_dissipative(x, x_dot, er, l)
             return jax.jacfwd(f)(ee)
 
         h = jax.vmap(one)(e, ed, e_ref, self.mesh.element_lengths)
@@ -217,6 +281,7 @@ class Beam(eqx.Module):
     def stress(self, nodes, s, y=None, measure="exact"):
         """Signed bending stress σ [Pa] at arc length s on fibre y (default: outer fibre,
         left side) (Eqs. 15–18)."""
+        self.section.require_modulus("a bending stress")
         y = self.section.fibre_distance if y is None else y
         e, x, l, k = self.element_at(nodes, s)
         e_ref = jnp.concatenate([self.mesh.reference_nodes[k], self.mesh.reference_nodes[k + 1]])
@@ -225,6 +290,7 @@ class Beam(eqx.Module):
     @eqx.filter_jit
     def element_stress(self, nodes, element, xi, y=None, measure="exact"):
         """Stress [Pa] in element ``element`` at local coordinate ξ = x/l ∈ [0, 1]."""
+        self.section.require_modulus("a bending stress")
         y = self.section.fibre_distance if y is None else y
         e = self.mesh.element_coordinates(nodes)[element]
         e_ref = self.mesh.reference_elements[element]
@@ -237,7 +303,14 @@ class Beam(eqx.Module):
         formulation's axial strain measure."""
         e, x, l, k = self.element_at(nodes, s)
         e_ref = jnp.concatenate([self.mesh.reference_nodes[k], self.mesh.reference_nodes[k + 1]])
-        return _axial_force(e, e_ref, x, l, self.section.axial_stiffness, self.formulation.axial_strain)
+        return self.elastic_axial_force(e, e_ref, x, l)
+
+    def elastic_axial_force(self, e, e_ref, x, l):
+        """Elastic axial force N = W'(ε) [N] of the axial law (EA·ε without one)."""
+        if self.axial_law is None:
+            return _axial_force(e, e_ref, x, l, self.section.axial_stiffness, self.formulation.axial_strain)
+        eps = _axial_strain(e, e_ref, x, l, self.formulation.axial_strain)
+        return jax.grad(self.axial_law.energy)(eps, self.section.axial_stiffness)
 
     @eqx.filter_jit
     def element_axial_force(self, nodes, element, xi):
@@ -245,7 +318,7 @@ class Beam(eqx.Module):
         e = self.mesh.element_coordinates(nodes)[element]
         e_ref = self.mesh.reference_elements[element]
         l = self.mesh.element_lengths[element]
-        return _axial_force(e, e_ref, xi * l, l, self.section.axial_stiffness, self.formulation.axial_strain)
+        return self.elastic_axial_force(e, e_ref, xi * l, l)
 
     @eqx.filter_jit
     def stress_along(self, nodes, points_per_element=11, y=None, measure="exact"):

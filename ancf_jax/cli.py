@@ -417,12 +417,14 @@ def _run(args) -> int:
     figures = not args.no_figures
     if base.name == "m1" and len(runs) == 1:
         r = results[0]
-        summary = report_m1(r, out, figures=figures, outputs=base.outputs)
+        summary = report_m1(r, out, figures=figures, outputs=base.outputs,
+                            precision=base.spec.outputs.precision)
         print(f"M1, {summary['elements']} elements, {r.solver}, dt = {r.dt:g} s: tip y min "
               f"{summary['tip_y_min']:.6f} m, max |sigma_e1_mid| {summary['max_abs_sigma_e1_mid'] / 1e6:.2f} MPa; "
               f"compile {r.compile_time_s:.1f} s, run {r.wall_time_s:.2f} s -> {out}/")
     elif base.name == "m2" and all(isinstance(k, int) for k in runs):
-        summary = report_m2(runs, out, figures=figures, animate=args.animate, outputs=base.outputs)
+        summary = report_m2(runs, out, figures=figures, animate=args.animate, outputs=base.outputs,
+                            precision=base.spec.outputs.precision)
         dist = ", ".join(f"{k.replace('_vs_', ' vs ')}: {v['max_m'] * 1e3:.1f} mm"
                          for k, v in summary["point1_distances"].items())
         print(f"M2, {labels} elements ({results[0].solver}, dt = {results[0].dt:g} s"
@@ -430,7 +432,8 @@ def _run(args) -> int:
               f"max distance of point-1 trajectories {dist or 'n/a'}; compile "
               f"{results[0].compile_time_s:.1f} s, run {summary['batch_wall_time_s']:.2f} s -> {out}/")
     else:
-        report_scenario(base.name, runs, base.outputs, out, figures=figures, animate=args.animate)
+        report_scenario(base.name, runs, base.outputs, out, figures=figures, animate=args.animate,
+                        precision=base.spec.outputs.precision)
         r = results[0]
         print(f"{base.name}: {len(runs)} run(s), {r.solver}, dt = {r.dt:g} s, t_end = {r.t[-1]:g} s; "
               f"compile {r.compile_time_s:.1f} s, run {sum(x.wall_time_s for x in results):.2f} s -> {out}/")

@@ -124,6 +124,46 @@ def force_tangent(force: AbstractForce, system, q, v, t, damping_coef, load_fact
     return p, -jax.jacfwd(local)(jnp.zeros(k, q.dtype))
 
 
+class BodyMassLoad(AbstractLoad):
+    """A mass-proportional load m·a·f(t) [N] at the centre of rigid body ``body`` (a
+    gravity-like load on one body only; Exudyn's ``LoadMassProportional``).
+
+    ``time_function`` (a JAX-traceable t ↦ scalar) scales ``acceleration`` [m/s²];
+    None: constant.
+    """
+
+    body: int = eqx.field(static=True)
+    acceleration: jnp.ndarray
+    time_function: Optional[Callable] = eqx.field(static=True, default=None)
+
+    def applied_force(self, system, q, v, t):
+        a = self.acceleration if self.time_function is None else self.acceleration * self.time_function(t)
+        o = system.body_offset(self.body)
+        return jnp.zeros_like(q).at[o:o + 2].add(system.bodies.mass[self.body] * a)
+
+    def coordinates(self, system, q):
+        return system.body_offset(self.body) + jnp.arange(2)
+
+
+class BeamMassLoad(AbstractLoad):
+    """A mass-proportional load on beam ``beam`` only: the consistent load
+    ∫ ρA Sᵀ a f(t) dx of :meth:`ancf_jax.beam.Beam.gravity_load` with acceleration a
+    [m/s²] (Exudyn's ``LoadMassProportional`` on a cable)."""
+
+    beam: int = eqx.field(static=True)
+    acceleration: jnp.ndarray
+    time_function: Optional[Callable] = eqx.field(static=True, default=None)
+
+    def applied_force(self, system, q, v, t):
+        a = self.acceleration if self.time_function is None else self.acceleration * self.time_function(t)
+        b = system.beams[self.beam]
+        o = system.beam_offset(self.beam)
+        return jnp.zeros_like(q).at[o:o + b.n_coordinates].add(jnp.reshape(b.gravity_load(a), (-1,)))
+
+    def coordinates(self, system, q):
+        return system.beam_offset(self.beam) + jnp.arange(system.beams[self.beam].n_coordinates)
+
+
 class PointForce(AbstractLoad):
     """A force F·f(t) [N] at a point, fixed in direction (not a follower load).
 

@@ -61,7 +61,10 @@ class Clamp(AbstractConstraint):
 
     ``mode="full"`` fixes the slope vector r' = t₀ (4 equations, as model M1 specifies);
     ``mode="direction"`` fixes only its direction, t₀ × r' = 0 (3 equations), leaving
-    the axial stretch at the node free.
+    the axial stretch at the node free; ``mode="exudyn"`` fixes the coordinates x, y
+    and r'_y at their initial values (3 equations, the clamp of Exudyn's cable examples
+    by three coordinate constraints; for a beam along x it is the same constraint
+    as ``"direction"``, since t₀ × r' = r'_y there).
     """
 
     node: BeamNode
@@ -78,6 +81,8 @@ class Clamp(AbstractConstraint):
         d = self.node.direction(system, q)
         if self.mode == "full":
             return jnp.concatenate([r, d - self.slope])
+        if self.mode == "exudyn":
+            return jnp.concatenate([r, (d[1] - self.slope[1])[None]])
         return jnp.concatenate([r, cross2(self.slope, d)[None]])
 
 
@@ -115,6 +120,20 @@ class PrescribedCoordinate(AbstractConstraint):
 
     def residual(self, system, q, t):
         return jnp.reshape(q[self.index] - self.function(t), (1,))
+
+
+class FixedCoordinate(AbstractConstraint):
+    """One coordinate of q held at a value: q[index] − value = 0 (1 equation), Exudyn's
+    ``CoordinateConstraint`` to the ground. ``value`` is array data (it can be batched
+    and differentiated); a value that follows a function of time is a
+    :class:`PrescribedCoordinate`."""
+
+    index: int = eqx.field(static=True)
+    value: jnp.ndarray
+    size: ClassVar[int] = 1
+
+    def residual(self, system, q, t):
+        return jnp.reshape(q[self.index] - self.value, (1,))
 
 
 class PrescribedPoint(AbstractConstraint):

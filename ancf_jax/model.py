@@ -34,15 +34,23 @@ from . import joints as J
 from . import points as P
 from .beam import Beam
 from .bodies import RigidBodies
+from .element.laws import check_law
 from .element.strain_energy import Formulation
 from .errors import ConstraintError, ModelError, VelocityProjectionWarning
-from .forces import PointForce, PointTorque, SpringDamper
+from .forces import BeamMassLoad, BodyMassLoad, PointForce, PointTorque, SpringDamper
 from .mesh import BeamMesh, pad
 from .newton import ModifiedNewton
 from .section import Section
 from .system import State, System
 from .validation import (check_choice, check_finite, check_nonnegative, check_positive,
                          check_vector)
+
+
+def _flag(what: str, value) -> bool:
+    """A bool option, checked (``True`` or ``False``, not 1 or "yes")."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ModelError(f"{what} must be True or False, got {value!r}")
+    return bool(value)
 
 
 # ---------------------------------------------------------------------- point references
@@ -77,6 +85,13 @@ def beam_point(beam: str, s: float) -> PointRef:
     return PointRef("beam", beam, check_nonnegative(f"arc length s on beam {beam!r}", s, "m"))
 
 
+#: clamp modes (:class:`ancf_jax.joints.Clamp`)
+CLAMP_MODES = ("full", "direction", "exudyn")
+#: coordinates of a beam node and of a body, in the order of q (:meth:`Model.coordinate`)
+NODE_COMPONENTS = ("x", "y", "slope_x", "slope_y")
+BODY_COMPONENTS = ("x", "y", "theta")
+
+
 @dataclasses.dataclass
 class _BeamSpec:
     mesh: BeamMesh
@@ -86,6 +101,9 @@ class _BeamSpec:
     formulation: Formulation
     initial_nodes: Optional[np.ndarray]
     initial_velocities: Optional[np.ndarray]
+    gravity: bool = True
+    axial_law: Any = None
+    bending_law: Any = None
 
 
 @dataclasses.dataclass
@@ -95,6 +113,8 @@ class _BodySpec:
     pose: np.ndarray
     velocity: np.ndarray  # (3,): ẋ, ẏ, θ̇; 0 where not given
     given: np.ndarray  # (3,) bool: which of ẋ, ẏ, θ̇ were given
+    gravity: bool = True
+    point_mass: bool = False  # translation only: θ held by the constraint "<name>.rotation"
 
 
 class Model:
@@ -120,7 +140,8 @@ class Model:
 
     def add_beam(self, name: str, mesh: BeamMesh, section: Section, *, alpha=0.0, beta=0.0,
                  formulation: Formulation | None = None, initial_nodes=None,
-                 initial_velocities=None) -> str:
+                 initial_velocities=None, gravity: bool = True, axial_law=None,
+                 bending_law=None) -> str:
         """Add a beam.
 
         Args:
@@ -132,6 +153,11 @@ class Model:
             formulation: strain measures and quadrature (default :class:`Formulation`).
             initial_nodes: initial nodal coordinates (n + 1, 4); default the reference.
             initial_velocities: initial nodal velocities (n + 1, 4); default zero.
+            gravity: whether the model's gravity acts on this beam (for a load on some
+                items only, see also :meth:`mass_proportional_load`).
+            axial_law: material law N(ε, ε̇) from :mod:`ancf_jax.element.laws` (e.g.
+                ``StrainRateDamped(d)``, Exudyn's cable damping); None: linear elastic.
+            bending_law: material law M(κ, κ̇), likewise.
         """
         if not isinstance(mesh, BeamMesh):
             raise ModelError(f"mesh of beam {name!r} must be a BeamMesh (see ancf_jax.mesh)")
@@ -147,13 +173,19 @@ class Model:
                 raise ModelError(f"{label} of beam {name!r} must have shape {shape}, got {arr.shape}")
         alpha = check_nonnegative(f"alpha of beam {name!r}", alpha, "1/s")
         beta = check_nonnegative(f"beta of beam {name!r}", beta, "s")
+        axial_law = check_law(f"axial_law of beam {name!r}", axial_law)
+        bending_law = check_law(f"bending_law of beam {name!r}", bending_law)
+        if bending_law is not None and (formulation or Formulation()).curvature == "small_strain":
+            raise ModelError(f"bending_law of beam {name!r} needs curvature 'exact' or 'material', "
+                             "not 'small_strain'")
         self._claim(name, "beam")
         self._beams[name] = _BeamSpec(mesh, section, alpha, beta, formulation or Formulation(),
-                                      nodes0, vel0)
+                                      nodes0, vel0, _flag(f"gravity of beam {name!r}", gravity),
+                                      axial_law, bending_law)
         return name
 
     def add_body(self, name: str, *, mass, inertia, position=(0.0, 0.0), angle=0.0,
-                 velocity=None, angular_velocity=None) -> str:
+                 velocity=None, angular_velocity=None, gravity: bool = True) -> str:
         """Add a rigid body (paper Eq. 14: coordinates x, y, θ).
 
         Args:
@@ -164,6 +196,7 @@ class Model:
             angle: θ [rad].
             velocity: centre velocity [m/s], shape (2,); None (default): not given.
             angular_velocity: θ̇ [rad/s]; None (default): not given.
+            gravity: whether the model's gravity acts on this body.
 
         A velocity that is not given starts at 0 and is then set by the joints (the
         body moves with what it is joined to, e.g. the point of a cable it rides on);
@@ -183,7 +216,55 @@ class Model:
                 raise ModelError(f"angular_velocity of body {name!r} must be a number, got {angular_velocity!r}")
             vel[2] = float(w)
         self._claim(name, "body")
-        self._bodies[name] = _BodySpec(m, j, pose, vel, given)
+        self._bodies[name] = _BodySpec(m, j, pose, vel, given, _flag(f"gravity of body {name!r}", gravity))
+        return name
+
+    def add_point_mass(self, name: str, *, mass, position=(0.0, 0.0), velocity=None,
+                       gravity: bool = True) -> str:
+        """Add a point mass (translation only; Exudyn's ``MassPoint2D``).
+
+        It is a body whose rotation carries no inertia and is held at θ = 0 by the
+        constraint ``"<name>.rotation"`` (θ = 0, appended after the joints; its
+        multiplier is zero, as nothing acts on θ), so the system keeps three coordinates
+        per body and x, y move exactly as a particle of mass m. Joints and loads that
+        need a rotation refuse it: a fixed joint, a torque, a body point other than its
+        centre, a prescribed or constrained θ.
+
+        Args:
+            name: unique name (it is a body: joints and loads refer to it as one).
+            mass: m [kg] > 0.
+            position: (x, y) [m].
+            velocity: initial velocity [m/s], shape (2,); None: not given (set by the
+                joints, else 0).
+            gravity: whether the model's gravity acts on it.
+        """
+        m = check_positive(f"mass of point mass {name!r}", mass, "kg")
+        pose = np.concatenate([check_vector(f"position of point mass {name!r}", position, 2), [0.0]])
+        vel = np.zeros(3)
+        given = np.array([velocity is not None] * 2 + [True])
+        if velocity is not None:
+            vel[:2] = check_vector(f"velocity of point mass {name!r}", velocity, 2)
+        self._claim(name, "body")
+        self._bodies[name] = _BodySpec(m, 0.0, pose, vel, given,
+                                       _flag(f"gravity of point mass {name!r}", gravity), point_mass=True)
+        return name
+
+    def mass_proportional_load(self, name: str, item: str, acceleration, time_function=None) -> str:
+        """A load m·a·f(t) on one beam or body only (Exudyn's ``LoadMassProportional``):
+        on a body m·a at its centre, on a beam the consistent load ∫ ρA Sᵀ a dx.
+
+        Args:
+            name: unique name.
+            item: a beam or body name.
+            acceleration: a [m/s²], shape (2,).
+            time_function: optional JAX-traceable scale ``t -> f(t)`` (default 1).
+        """
+        acc = tuple(check_vector(f"acceleration of {name!r}", acceleration, 2))
+        if time_function is not None and not callable(time_function):
+            raise ModelError(f"time_function of load {name!r} must be callable")
+        self._claim(name, "force")
+        self._forces.append(("mass_proportional", name, dict(item=item, acceleration=acc,
+                                                             time_function=time_function)))
         return name
 
     # ------------------------------------------------------------------ joints
@@ -191,9 +272,10 @@ class Model:
         """Clamp a beam node to the ground at its initial position and slope.
 
         ``mode="full"`` fixes the slope vector (4 equations), ``"direction"`` only its
-        direction (3 equations).
+        direction (3 equations), ``"exudyn"`` the coordinates x, y and r'_y (3 equations,
+        Exudyn's clamp; see :class:`~ancf_jax.joints.Clamp`).
         """
-        check_choice(f"mode of clamp {name!r}", mode, ("full", "direction"))
+        check_choice(f"mode of clamp {name!r}", mode, CLAMP_MODES)
         self._claim(name, "joint")
         self._joints.append(("clamp", name, dict(beam=beam, node=node, mode=mode)))
         return name
@@ -243,6 +325,39 @@ class Model:
             rate = float(r)
         self._claim(name, "joint")
         self._sliders[name] = dict(body=body, beam=beam, s=s0, local=lp, hold=bool(hold), rate=rate)
+        return name
+
+    def coordinate(self, name: str, point: PointRef, component: str, *, value=None,
+                   function: Callable | None = None) -> str:
+        """Constrain one coordinate (Exudyn's ``CoordinateConstraint`` to the ground).
+
+        Args:
+            name: unique name.
+            point: a beam node (:func:`node`; components ``"x"``, ``"y"``,
+                ``"slope_x"``, ``"slope_y"``: r_x, r_y, r'_x, r'_y) or a body
+                (:func:`body_point` at its centre; components ``"x"``, ``"y"``,
+                ``"theta"``).
+            component: the coordinate.
+            value: the value held [m, -, rad]; default its initial value.
+            function: instead of ``value``, a JAX-traceable ``t -> value`` it follows.
+        """
+        if not isinstance(point, PointRef) or point.kind not in ("node", "body"):
+            raise ModelError(f"point of coordinate constraint {name!r} must be node(beam, i) or "
+                             f"body_point(body), got {point!r}")
+        if point.kind == "body" and tuple(point.value) != (0.0, 0.0):
+            raise ModelError(f"point of coordinate constraint {name!r} must be a body's centre "
+                             "(body_point(body) without local)")
+        check_choice(f"component of coordinate constraint {name!r}", component,
+                     NODE_COMPONENTS if point.kind == "node" else BODY_COMPONENTS)
+        if value is not None and function is not None:
+            raise ModelError(f"coordinate constraint {name!r}: give value or function, not both")
+        if function is not None and not callable(function):
+            raise ModelError(f"function of coordinate constraint {name!r} must be callable")
+        if value is not None:
+            value = float(check_finite(f"value of coordinate constraint {name!r}", value))
+        self._claim(name, "joint")
+        self._joints.append(("coordinate", name, dict(point=point, component=component, value=value,
+                                                      function=function)))
         return name
 
     def prescribe_point(self, name: str, point: PointRef, function: Callable) -> str:
@@ -351,12 +466,20 @@ class Model:
                 raise ModelError(f"{what}: {label} {s} is outside beam {name!r} "
                                  f"(accepted 0..{length:g} m)")
 
+        def rotating(name, what, needs):
+            body(name, what)
+            if self._bodies[name].point_mass:
+                raise ModelError(f"{what} needs {needs}, but {name!r} is a point mass (translation "
+                                 "only); use add_body with an inertia")
+
         def point(ref, what):
             if not isinstance(ref, PointRef):
                 raise ModelError(f"{what}: a point must be given with ground(), body_point(), "
                                  f"node() or beam_point(), got {ref!r}")
             if ref.kind == "body":
                 body(ref.target, what)
+                if tuple(ref.value) != (0.0, 0.0):
+                    rotating(ref.target, what, "a body point away from the centre")
             elif ref.kind == "node":
                 node_ok(ref.target, ref.value, what)
             elif ref.kind == "beam":
@@ -367,20 +490,34 @@ class Model:
             what = f"joint {name!r}"
             if kind == "clamp":
                 node_ok(a["beam"], a["node"], what)
-            if kind == "fixed" or kind == "prescribe_body":
+            if kind == "fixed":
+                rotating(a["body"], what, "a rotation (fixed joint)")
+                if a["point"].kind == "body":
+                    rotating(a["point"].target, what, "a rotation (fixed joint)")
+            if kind == "prescribe_body":
                 body(a["body"], what)
+                if a["coordinate"] == "theta":
+                    rotating(a["body"], what, "a rotation (prescribed theta)")
+            if kind == "coordinate" and a["point"].kind == "body" and a["component"] == "theta":
+                rotating(a["point"].target, what, "a rotation (constrained theta)")
             for key in ("point", "a", "b"):
                 if key in a:
                     point(a[key], what)
         for name, a in self._sliders.items():
             what = f"sliding joint {name!r}"
             body(a["body"], what)
+            if tuple(a["local"]) != (0.0, 0.0):
+                rotating(a["body"], what, "a body point away from the centre")
             beam(a["beam"], what)
             arc_ok(a["beam"], a["s"], what, "initial arc length s =")
         for kind, name, a in self._forces:
             what = f"force {name!r}"
             if kind == "torque":
-                body(a["body"], what)
+                rotating(a["body"], what, "a rotation (torque)")
+            if kind == "mass_proportional" and a["item"] not in self._beams and a["item"] not in self._bodies:
+                known = ", ".join(map(repr, beams + bodies)) or "none"
+                raise ModelError(f"{what} refers to {a['item']!r}, which is no beam or body "
+                                 f"(beams and bodies: {known})")
             for key in ("point", "a", "b"):
                 if key in a:
                     point(a[key], what)
@@ -423,7 +560,8 @@ class Model:
                         raise ModelError(f"pad_to for beam {name!r} must be >= its {n} elements, got {target}")
                     mesh = pad(mesh, int(target))
             beams.append(Beam(mesh, spec.section, alpha=spec.alpha, beta=spec.beta,
-                              formulation=spec.formulation))
+                              formulation=spec.formulation, axial_law=spec.axial_law,
+                              bending_law=spec.bending_law))
             ref = np.asarray(mesh.reference_nodes)
             x0 = ref.copy()
             if spec.initial_nodes is not None:
@@ -503,6 +641,18 @@ class Model:
                 u0 = rot_t @ (d / np.linalg.norm(d))
                 constraints.append(J.FixedJoint(name, pt, P.BodyPoint(k, jnp.asarray(local, float)),
                                                 jnp.asarray(u0, float)))
+            elif kind == "coordinate":
+                ref = a["point"]
+                if ref.kind == "node":
+                    b, i = node_index(ref.target, ref.value)
+                    idx = skeleton.beam_offset(b) + 4 * i + NODE_COMPONENTS.index(a["component"])
+                else:
+                    idx = skeleton.body_offset(body_of(ref.target)) + BODY_COMPONENTS.index(a["component"])
+                if a["function"] is not None:
+                    constraints.append(J.PrescribedCoordinate(name, idx, a["function"]))
+                else:
+                    value = q0[idx] if a["value"] is None else a["value"]
+                    constraints.append(J.FixedCoordinate(name, idx, jnp.asarray(value, float)))
             elif kind == "prescribe_point":
                 constraints.append(J.PrescribedPoint(name, resolve(a["point"], what), a["function"]))
             elif kind == "prescribe_body":
@@ -517,6 +667,10 @@ class Model:
             constraints.append(J.SlidingJoint(name, b, j, P.BodyPoint(k, jnp.asarray(a["local"], float))))
             if (a["hold"] if hold is None else hold):
                 constraints.append(J.SlidingHold(f"{name}.hold", j, jnp.asarray(a["s"], float)))
+        for k, name in enumerate(body_names):
+            if self._bodies[name].point_mass:
+                constraints.append(J.FixedCoordinate(f"{name}.rotation", skeleton.body_offset(k) + 2,
+                                                     jnp.zeros(())))
 
         # ---- forces
         forces = []
@@ -535,11 +689,19 @@ class Model:
                     l0 = float(np.linalg.norm(initial_position(pa) - initial_position(pb)))
                 forces.append(SpringDamper(name, pa, pb, jnp.asarray(a["stiffness"], float),
                                            jnp.asarray(a["damping"], float), jnp.asarray(l0, float)))
+            elif kind == "mass_proportional":
+                acc = jnp.asarray(a["acceleration"], float)
+                if a["item"] in self._bodies:
+                    forces.append(BodyMassLoad(name, body_of(a["item"]), acc, a["time_function"]))
+                else:
+                    forces.append(BeamMassLoad(name, beam_of(a["item"]), acc, a["time_function"]))
 
+        gravity_off = tuple(n for n in body_names if not self._bodies[n].gravity) + tuple(
+            n for n in beam_names if not self._beams[n].gravity)
         system = System(bodies, tuple(beams), tuple(constraints), tuple(forces),
                         jnp.asarray(self.gravity, float), n_sliding=len(slider_names),
                         body_names=tuple(body_names), beam_names=tuple(beam_names),
-                        sliding_names=tuple(slider_names))
+                        sliding_names=tuple(slider_names), gravity_off=gravity_off)
         v0 = np.asarray(system.pack(body_vel, vel0, s_rate))
         state = State(jnp.asarray(q0), jnp.asarray(v0), jnp.zeros(()))
         if assemble:

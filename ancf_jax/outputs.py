@@ -116,12 +116,22 @@ def evaluate(results: Results, outputs: Iterable[Output]) -> dict[str, np.ndarra
     return out
 
 
-def write_csv(path: str | Path, columns: dict[str, np.ndarray], precision: int = 10) -> None:
-    """Write equal-length columns with a header row (SI units)."""
+def write_csv(path: str | Path, columns: dict[str, np.ndarray], precision: int | None = None) -> None:
+    """Write equal-length columns with a header row (SI units).
+
+    Args:
+        precision: significant digits (1..17); None (default): the shortest text that
+            reads back to the same double (``repr``: a full round trip).
+    """
+    if precision is not None and (isinstance(precision, bool) or not isinstance(precision, int)
+                                  or not 1 <= precision <= 17):
+        from .errors import ModelError
+        raise ModelError(f"precision of CSV output must be an integer 1..17 or None, got {precision!r}")
     names = list(columns)
     data = np.column_stack([np.asarray(columns[k], float) for k in names])
+    fmt = repr if precision is None else (lambda x: f"{x:.{precision}g}")
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(names)
         for row in data:
-            w.writerow([f"{x:.{precision}g}" for x in row])
+            w.writerow([fmt(float(x)) for x in row])

@@ -30,13 +30,13 @@ def _times(t_end: float, count: int) -> list[float]:
 
 # ---------------------------------------------------------------------------- M1
 def report_m1(results: Results, out_dir: str | Path, *, figures: bool = True,
-              outputs=m1_def.OUTPUTS) -> dict:
+              outputs=m1_def.OUTPUTS, precision: int | None = None) -> dict:
     """Write M1's CSV, NPZ, summary and Figs. 5–8 into ``out_dir``."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     n = int(results.system.beams[0].mesh.n_elements)
     cols = evaluate(results, outputs)
-    write_csv(out / f"m1_n{n}.csv", cols)
+    write_csv(out / f"m1_n{n}.csv", cols, precision)
     sig_approx = results.element_stress("beam", m1_def.STRESS_ELEMENT, m1_def.STRESS_XI,
                                         m1_def.STRESS_FIBRE, "small_strain")
     s, sigma = results.stress_along("beam", 11)
@@ -79,7 +79,7 @@ def report_m1(results: Results, out_dir: str | Path, *, figures: bool = True,
 
 # ---------------------------------------------------------------------------- M2
 def report_m2(runs: dict[int, Results], out_dir: str | Path, *, figures: bool = True,
-              animate: bool = False, outputs=m2_def.OUTPUTS) -> dict:
+              animate: bool = False, outputs=m2_def.OUTPUTS, precision: int | None = None) -> dict:
     """Write M2's per-mesh CSV/NPZ, the summary and Figs. 12–13 into ``out_dir``.
 
     ``runs`` maps element count → results. The summary states the distances between
@@ -94,7 +94,7 @@ def report_m2(runs: dict[int, Results], out_dir: str | Path, *, figures: bool = 
         r = runs[n]
         cols = evaluate(r, outputs)
         cols_all[n] = cols
-        write_csv(out / f"m2_n{n}.csv", cols)
+        write_csv(out / f"m2_n{n}.csv", cols, precision)
         reaction = r.sliding_reaction("slider")
         s, sigma = r.stress_along("cable", 11)
         r.save_npz(out / f"m2_n{n}.npz", stress_s=s, stress_sigma=sigma, sliding_reaction=reaction,
@@ -157,7 +157,7 @@ def report_m2(runs: dict[int, Results], out_dir: str | Path, *, figures: bool = 
 
 # ---------------------------------------------------------------------------- any scenario
 def report_scenario(name: str, runs: dict, outputs, out_dir: str | Path, *, figures: bool = True,
-                    animate: bool = False) -> dict:
+                    animate: bool = False, precision: int | None = None) -> dict:
     """Write CSV/NPZ per run, ``summary.json`` and default figures for any scenario.
 
     ``runs`` maps a label (the element count of a one-beam scenario, or "") to results;
@@ -169,7 +169,7 @@ def report_scenario(name: str, runs: dict, outputs, out_dir: str | Path, *, figu
     for label, r in runs.items():
         stem = f"{name}_n{label}" if label != "" else name
         cols = evaluate(r, outputs)
-        write_csv(out / f"{stem}.csv", cols)
+        write_csv(out / f"{stem}.csv", cols, precision)
         extra = {}
         for b in r.system.beam_names:
             s, sigma = r.stress_along(b, 11)

@@ -1,4 +1,8 @@
-"""Cross-section and material of a beam: E, A, I, mass per length, outer fibre."""
+"""Cross-section and material of a beam: E, A, I, mass per length, outer fibre.
+
+A section is given either by E, A and I (:class:`Section`) or, as Exudyn's cable
+takes it, by the stiffnesses EA, EI and ρA (:meth:`Section.from_stiffness`).
+"""
 
 from __future__ import annotations
 
@@ -20,6 +24,10 @@ class Section(eqx.Module):
         mass_per_length: ρA [kg/m].
         fibre_distance: distance of the outer fibre from the centre line [m], used as the
             default y of bending stresses (Eq. 18).
+        modulus_known: False for a section given by its stiffnesses only
+            (:meth:`from_stiffness` without ``youngs_modulus``): E, A and I are then not
+            known separately, the element sees EA and EI exactly, and stresses raise
+            (static).
     """
 
     youngs_modulus: jnp.ndarray
@@ -27,9 +35,10 @@ class Section(eqx.Module):
     second_moment: jnp.ndarray
     mass_per_length: jnp.ndarray
     fibre_distance: jnp.ndarray
+    modulus_known: bool = eqx.field(static=True)
 
     def __init__(self, youngs_modulus, area, second_moment, mass_per_length,
-                 fibre_distance=None):
+                 fibre_distance=None, *, modulus_known: bool = True):
         self.youngs_modulus = jnp.asarray(check_positive("youngs_modulus (E)", youngs_modulus, "Pa"), float)
         self.area = jnp.asarray(check_positive("area (A)", area, "m^2"), float)
         self.second_moment = jnp.asarray(check_positive("second_moment (I)", second_moment, "m^4"), float)
@@ -38,6 +47,41 @@ class Section(eqx.Module):
         if fibre_distance is None:
             fibre_distance = math.sqrt(2.0 * float(second_moment) / float(area))  # circle-equivalent
         self.fibre_distance = jnp.asarray(check_positive("fibre_distance", fibre_distance, "m"), float)
+        self.modulus_known = bool(modulus_known)
+
+    @classmethod
+    def from_stiffness(cls, axial_stiffness, bending_stiffness, mass_per_length, *,
+                       fibre_distance=None, youngs_modulus=None):
+        """A section given as Exudyn's cable takes it: EA [N], EI [N·m²] and ρA [kg/m].
+
+        Args:
+            axial_stiffness: EA [N] > 0.
+            bending_stiffness: EI [N·m²] > 0.
+            mass_per_length: ρA [kg/m] > 0.
+            fibre_distance: outer-fibre distance c [m] for stresses (default
+                √(2 EI/EA) = √(2I/A), the circle-equivalent value of :class:`Section`).
+            youngs_modulus: E [Pa], optional: needed only for stresses (σ = −E y κ,
+                Eq. 18; A = EA/E and I = EI/E then). Without it the stored E is 1 and
+                A, I hold EA, EI, so that the element energy (Eq. 8) sees EA and EI
+                exactly; stresses then raise a :class:`~ancf_jax.errors.ModelError`.
+        """
+        ea = check_positive("axial_stiffness (EA)", axial_stiffness, "N")
+        ei = check_positive("bending_stiffness (EI)", bending_stiffness, "N*m^2")
+        if fibre_distance is None:
+            fibre_distance = math.sqrt(2.0 * float(ei) / float(ea))
+        if youngs_modulus is None:
+            return cls(1.0, ea, ei, mass_per_length, fibre_distance, modulus_known=False)
+        e = check_positive("youngs_modulus (E)", youngs_modulus, "Pa")
+        return cls(e, float(ea) / float(e), float(ei) / float(e), mass_per_length, fibre_distance)
+
+    def require_modulus(self, what: str) -> None:
+        """Raise a one-line :class:`~ancf_jax.errors.ModelError` if E is not known
+        (a section from :meth:`from_stiffness` without ``youngs_modulus``)."""
+        if not self.modulus_known:
+            from .errors import ModelError
+            raise ModelError(f"{what} needs Young's modulus: the section was given by EA and EI "
+                             "only; give youngs_modulus (E > 0, Pa) to Section.from_stiffness "
+                             "(scenario: key E next to EA and EI)")
 
     @classmethod
     def circle(cls, diameter, youngs_modulus, *, density=None, mass_per_length=None,

@@ -51,6 +51,8 @@ class System(eqx.Module):
         gravity: acceleration of gravity [m/s²], shape (2,).
         n_sliding: number of sliding coordinates (static).
         body_names, beam_names, sliding_names: names for messages and outputs (static).
+        gravity_off: names of the bodies and beams that gravity does not act on (static;
+            empty: on all).
     """
 
     bodies: RigidBodies
@@ -62,6 +64,7 @@ class System(eqx.Module):
     body_names: tuple = eqx.field(static=True, default=())
     beam_names: tuple = eqx.field(static=True, default=())
     sliding_names: tuple = eqx.field(static=True, default=())
+    gravity_off: tuple = eqx.field(static=True, default=())
 
     # ------------------------------------------------------------------ layout
     @property
@@ -187,10 +190,24 @@ class System(eqx.Module):
                    jnp.zeros(()))
 
     def gravity_load(self):
-        """Generalized gravity force (constant), shape (n,)."""
+        """Generalized gravity force (constant), shape (n,); zero on the items named in
+        :attr:`gravity_off`."""
+        if self.gravity_off:
+            return self._gravity_load_on_some()
         parts = [jnp.reshape(self.bodies.mass[:, None] * jnp.array([1.0, 1.0, 0.0])[None, :]
                              * jnp.concatenate([self.gravity, jnp.zeros(1)])[None, :], (-1,))]
         parts += [jnp.reshape(b.gravity_load(self.gravity), (-1,)) for b in self.beams]
+        parts += [jnp.zeros(self.n_sliding)]
+        return jnp.concatenate(parts)
+
+    def _gravity_load_on_some(self):
+        """:meth:`gravity_load` with gravity off on the items of :attr:`gravity_off`."""
+        on = np.array([n not in self.gravity_off for n in self.body_names], float)
+        body = (self.bodies.mass * jnp.asarray(on))[:, None] * jnp.concatenate(
+            [self.gravity, jnp.zeros(1)])[None, :]
+        parts = [jnp.reshape(body, (-1,))]
+        parts += [jnp.reshape(b.gravity_load(self.gravity), (-1,)) if name not in self.gravity_off
+                  else jnp.zeros(b.n_coordinates) for b, name in zip(self.beams, self.beam_names)]
         parts += [jnp.zeros(self.n_sliding)]
         return jnp.concatenate(parts)
 
@@ -215,7 +232,8 @@ class System(eqx.Module):
     def _beam_forces(self, q, v, with_elastic: bool):
         """Elastic forces −∂U/∂q and Rayleigh forces −(αM + βK)v of all beams, in one
         linearization of the elastic force per beam: ``jax.jvp`` of −∂U/∂e along the
-        nodal velocities returns the force (primal) and −K v (tangent) together."""
+        nodal velocities returns the force (primal) and −K v (tangent) together; plus the
+        rate parts of material laws (:meth:`ancf_jax.beam.Beam.dissipative_force`)."""
         elastic = jnp.zeros_like(q)
         damping = jnp.zeros_like(q)
         for i, b in enumerate(self.beams):
@@ -226,6 +244,8 @@ class System(eqx.Module):
             o = self.beam_offset(i)
             sl = slice(o, o + b.n_coordinates)
             damping = damping.at[sl].add(-b.alpha * m_v + b.beta * jnp.reshape(minus_kv, (-1,)))
+            if b.has_rate_law:  # rate parts of material laws (a dissipation)
+                damping = damping.at[sl].add(jnp.reshape(b.dissipative_force(nodes, vel), (-1,)))
             if with_elastic:
                 elastic = elastic.at[sl].add(jnp.reshape(f, (-1,)))
         return elastic, damping

@@ -53,6 +53,8 @@ from ancf_jax import joints as J
 from ancf_jax import mesh as _mesh
 from ancf_jax import points as P
 from ancf_jax.element.quadrature import rule as _rule
+from ancf_jax.element.laws import LinearElastic, StrainRateDamped
+from ancf_jax.interop.exudyn import CABLE_RULES
 from ancf_jax.element.strain_energy import Formulation
 from ancf_jax.errors import ModelError
 from ancf_jax.model import Model, node
@@ -73,11 +75,7 @@ MODELS = ("M1", "M2", "H1")
 #: Exudyn 1.13.6's elastic force of a randomly deformed element to 1e-15 (relative)
 #: (``tests/test_exudyn_crosscheck.py::test_exudyn_quadrature_rules``); the source
 #: comments call them "A9-B5", "A7-B3" and "A4-B3" (polynomial orders).
-EXUDYN_RULES = {
-    0: (("gauss", 5), ("gauss", 3)),    # Exudyn default
-    1: (("gauss", 4), ("gauss", 2)),
-    2: (("lobatto", 3), ("gauss", 2)),
-}
+EXUDYN_RULES = CABLE_RULES  # 0 is Exudyn's default
 
 #: H1, the very flexible pendulum (docs/models.md), SI. No ancf_jax builder exists yet, so
 #: the parameters live here (the lead may move them to ``ancf_jax.models``).
@@ -332,6 +330,12 @@ def build_exudyn(system, state, *, name: str = "", integration: int | None = Non
         ei = float(sec.youngs_modulus) * float(sec.second_moment)
         rho_a = float(sec.mass_per_length)
         lengths = np.asarray(beam.mesh.element_lengths, float)
+        damping = {}
+        for key, law in (("axialDamping", beam.axial_law), ("bendingDamping", beam.bending_law)):
+            if isinstance(law, StrainRateDamped):
+                damping[key] = float(law.damping)
+            elif law is not None and not isinstance(law, LinearElastic):
+                raise NotImplementedError(f"material law {type(law).__name__} is not translated to Exudyn")
         nodes = [mbs.AddNode(eii.NodePoint2DSlope1(referenceCoordinates=list(ref[i]),
                                                    initialCoordinates=list(x0[i] - ref[i]),
                                                    initialVelocities=list(xv[i])))
@@ -340,7 +344,7 @@ def build_exudyn(system, state, *, name: str = "", integration: int | None = Non
         for i in range(n):
             e = mbs.AddObject(eii.ObjectANCFCable2D(
                 nodeNumbers=[nodes[i], nodes[i + 1]], length=float(lengths[i]), massPerLength=rho_a,
-                axialStiffness=ea, bendingStiffness=ei, useReducedOrderIntegration=mode))
+                axialStiffness=ea, bendingStiffness=ei, useReducedOrderIntegration=mode, **damping))
             mbs.AddLoad(eii.LoadMassProportional(
                 markerNumber=mbs.AddMarker(eii.MarkerBodyMass(bodyNumber=e)), loadVector=gravity))
             elements.append(e)
@@ -390,11 +394,11 @@ def build_exudyn(system, state, *, name: str = "", integration: int | None = Non
     sliders = []
     for c in system.constraints:
         if isinstance(c, J.Clamp):
-            if c.mode != "full":
+            if c.mode == "direction":
                 raise NotImplementedError("clamp mode 'direction' is not translated to Exudyn")
             b, i = c.node.beam, node_index(c.node)
             target = np.concatenate([np.asarray(c.location, float), np.asarray(c.slope, float)])
-            for k in range(4):
+            for k in ((0, 1, 2, 3) if c.mode == "full" else (0, 1, 3)):  # "exudyn": x, y, r'_y
                 fix_coordinate(b, i, k, target[k])
         elif isinstance(c, J.Coincident):
             a, bb = c.a, c.b

@@ -49,3 +49,19 @@ def test_m1_matches_exudyn(exudyn_process):
 
 def test_sliding_joint_term(exudyn_process):
     run_case(exudyn_process, "sliding_joint_term")
+
+
+def test_strain_rate_damping_element_matches_exudyn(exudyn_process):
+    run_case(exudyn_process, "strain_rate_damping_element")
+
+
+def test_strain_rate_damping_dynamics_matches_exudyn(exudyn_process):
+    run_case(exudyn_process, "strain_rate_damping_dynamics")
+
+
+def test_from_exudyn_matches_exudyn(exudyn_process):
+    run_case(exudyn_process, "from_exudyn_dynamics")
+
+
+def test_from_exudyn_eigenvalues_match_exudyn(exudyn_process):
+    run_case(exudyn_process, "from_exudyn_eigenvalues")

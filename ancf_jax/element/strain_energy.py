@@ -139,8 +139,43 @@ def curvature(e, x, length, measure="exact"):
     raise ModelError(f"curvature measure must be one of {CURVATURES}, got {measure!r}")
 
 
+def _dot(a, b):
+    return jnp.sum(a * b, axis=-1)
+
+
+def axial_strains(e, e_ref, length, formulation: Formulation = Formulation()):
+    """Axial strain ε at the axial quadrature points and the reference metric
+    g = |r₀'| there, each shape (p,) (the integrand of the axial term of Eq. 8)."""
+    xa, _ = rule(*formulation.axial_quadrature)
+    r1 = interpolate_at(e, xa, length, 1)
+    r1_ref = interpolate_at(e_ref, xa, length, 1)
+    g2 = _dot(r1_ref, r1_ref)
+    if formulation.axial_strain == "green_lagrange":
+        eps = 0.5 * (_dot(r1, r1) - g2) / g2
+    else:
+        eps = jnp.sqrt(_dot(r1, r1) / g2) - 1.0
+    return eps, jnp.sqrt(g2)
+
+
+def curvature_changes(e, e_ref, length, formulation: Formulation = Formulation()):
+    """Curvature change κ − κ₀ at the bending quadrature points and the reference
+    metric g = |r₀'| there, each shape (p,), for the ``"exact"`` and ``"material"``
+    measures (the integrand of the bending term of Eq. 8)."""
+    xb, _ = rule(*formulation.bending_quadrature)
+    r1 = interpolate_at(e, xb, length, 1)
+    r2 = interpolate_at(e, xb, length, 2)
+    r1_ref = interpolate_at(e_ref, xb, length, 1)
+    r2_ref = interpolate_at(e_ref, xb, length, 2)
+    power = 1.5 if formulation.curvature == "exact" else 1.0
+
+    def kappa(a, b):
+        return (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]) / _dot(a, a) ** power
+
+    return kappa(r1, r2) - kappa(r1_ref, r2_ref), jnp.sqrt(_dot(r1_ref, r1_ref))
+
+
 def strain_energy(e, e_ref, length, axial_stiffness, bending_stiffness,
-                  formulation: Formulation = Formulation()):
+                  formulation: Formulation = Formulation(), axial_law=None, bending_law=None):
     """Strain energy U of one element [J] (Eq. 8).
 
     Args:
@@ -151,39 +186,66 @@ def strain_energy(e, e_ref, length, axial_stiffness, bending_stiffness,
         axial_stiffness: EA [N].
         bending_stiffness: EI [N·m²].
         formulation: strain measures and quadrature rules.
+        axial_law: a law of :mod:`ancf_jax.element.laws` whose energy density W(ε)
+            replaces ½ EA ε²; None: linear elastic (Eq. 8 as printed).
+        bending_law: likewise for ½ EI (κ − κ₀)²; needs the ``"exact"`` or
+            ``"material"`` curvature.
 
     Returns:
         Scalar energy [J].
     """
-    xa, wa = rule(*formulation.axial_quadrature)
-    xb, wb = rule(*formulation.bending_quadrature)
-
-    def dot(a, b):
-        return jnp.sum(a * b, axis=-1)
+    _, wa = rule(*formulation.axial_quadrature)
+    _, wb = rule(*formulation.bending_quadrature)
 
     # axial term at the axial quadrature points (vectorized over points)
-    r1 = interpolate_at(e, xa, length, 1)
-    r1_ref = interpolate_at(e_ref, xa, length, 1)
-    g2 = dot(r1_ref, r1_ref)
-    if formulation.axial_strain == "green_lagrange":
-        eps = 0.5 * (dot(r1, r1) - g2) / g2
-    else:
-        eps = jnp.sqrt(dot(r1, r1) / g2) - 1.0
-    ua = jnp.dot(jnp.asarray(wa), 0.5 * axial_stiffness * eps**2 * jnp.sqrt(g2))
+    eps, g = axial_strains(e, e_ref, length, formulation)
+    w_axial = (0.5 * axial_stiffness * eps**2 if axial_law is None
+               else axial_law.energy(eps, axial_stiffness))
+    ua = jnp.dot(jnp.asarray(wa), w_axial * g)
 
     # bending term at the bending quadrature points
-    r1 = interpolate_at(e, xb, length, 1)
-    r2 = interpolate_at(e, xb, length, 2)
     if formulation.curvature == "small_strain":
-        ub = jnp.dot(jnp.asarray(wb), 0.5 * bending_stiffness * dot(r2, r2))
+        if bending_law is not None:
+            raise ModelError("a bending law needs curvature 'exact' or 'material', not 'small_strain'")
+        xb, _ = rule(*formulation.bending_quadrature)
+        r2 = interpolate_at(e, xb, length, 2)
+        ub = jnp.dot(jnp.asarray(wb), 0.5 * bending_stiffness * _dot(r2, r2))
     else:
-        r1_ref = interpolate_at(e_ref, xb, length, 1)
-        r2_ref = interpolate_at(e_ref, xb, length, 2)
-        power = 1.5 if formulation.curvature == "exact" else 1.0
-
-        def kappa(a, b):
-            return (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]) / dot(a, a) ** power
-
-        dk = kappa(r1, r2) - kappa(r1_ref, r2_ref)
-        ub = jnp.dot(jnp.asarray(wb), 0.5 * bending_stiffness * dk**2 * jnp.sqrt(dot(r1_ref, r1_ref)))
+        dk, g = curvature_changes(e, e_ref, length, formulation)
+        w_bending = (0.5 * bending_stiffness * dk**2 if bending_law is None
+                     else bending_law.energy(dk, bending_stiffness))
+        ub = jnp.dot(jnp.asarray(wb), w_bending * g)
     return length * (ua + ub)
+
+
+def dissipative_force(e, e_dot, e_ref, length, axial_stiffness, bending_stiffness,
+                      formulation: Formulation = Formulation(), axial_law=None, bending_law=None):
+    """Generalized force of the rate parts of the laws on one element, shape (8,),
+    acting against the motion (the resisting force, like ∂U/∂e):
+
+        f_d = ∫₀ˡ [N_d(ε, ε̇) ∂ε/∂e + M_d(κ, κ̇) ∂κ/∂e] g dx,
+
+    with ε̇ = (∂ε/∂e) ė and κ̇ = (∂κ/∂e) ė (one JVP each) and the transposed
+    products by one VJP each, at the quadrature points of the energy. Exudyn's cable
+    damping (δW = ∫ d γ̇ δγ dx) is this with N_d = d_A ε̇, M_d = d_K κ̇. Laws without a
+    rate part add nothing (and nothing is traced for them).
+    """
+    out = jnp.zeros_like(e)
+    for law, stiffness, quadrature, strains in (
+            (axial_law, axial_stiffness, formulation.axial_quadrature, axial_strains),
+            (bending_law, bending_stiffness, formulation.bending_quadrature, curvature_changes)):
+        if law is None or not law.has_rate:
+            continue
+        if strains is curvature_changes and formulation.curvature == "small_strain":
+            raise ModelError("a bending law needs curvature 'exact' or 'material', not 'small_strain'")
+        _, w = rule(*quadrature)
+
+        def gamma(x, strains=strains):
+            return strains(x, e_ref, length, formulation)[0]
+
+        (g_val, g_dot) = jax.jvp(gamma, (e,), (e_dot,))
+        _, metric = strains(e, e_ref, length, formulation)
+        n_d = law.rate_force(g_val, g_dot, stiffness)
+        _, vjp = jax.vjp(gamma, e)
+        out = out + vjp(length * jnp.asarray(w) * metric * n_d)[0]
+    return out

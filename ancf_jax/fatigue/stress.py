@@ -25,7 +25,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..beam import Beam
-from ..element.stress import BARLOW_POINTS, axial_force, bending_stress
+from ..element.stress import BARLOW_POINTS, bending_stress
 from ..errors import ModelError
 from ..system import System
 
@@ -44,12 +44,13 @@ def fibre_stress(beam: Beam, nodes, element, xi, fibre=None, measure="exact"):
         fibre: fibre distance c [m] (default the section's outer fibre).
         measure: curvature measure of the bending stress.
     """
+    beam.section.require_modulus("a fibre stress")
     c = beam.section.fibre_distance if fibre is None else fibre
     e = beam.mesh.element_coordinates(nodes)[element]
     e_ref = beam.mesh.reference_elements[element]
     length = beam.mesh.element_lengths[element]
     x = xi * length
-    n = axial_force(e, e_ref, x, length, beam.section.axial_stiffness, beam.formulation.axial_strain)
+    n = beam.elastic_axial_force(e, e_ref, x, length)
     sb = bending_stress(e, e_ref, x, length, beam.section.youngs_modulus, c, measure)
     return n / beam.section.area + jnp.stack([sb, -sb])
 

@@ -15,6 +15,7 @@ import numpy as np
 
 from .. import mesh as _mesh
 from ..beam import Beam
+from ..element import laws
 from ..element.strain_energy import Formulation
 from ..errors import ModelError
 from ..model import Model, beam_point, body_point, ground, node
@@ -62,8 +63,13 @@ def on_beam(s: float, length: float) -> float:
 
 
 def section_of(beam: S.BeamSpec, length: float) -> Section:
-    """The beam's :class:`Section`; ρA from mass_per_length, density·A or mass/L."""
+    """The beam's :class:`Section` (from E, A, I or from EA, EI); ρA from
+    mass_per_length, density·A or mass/L."""
     sec = beam.section
+    if sec.EA is not None:
+        mpl = sec.mass_per_length if sec.mass_per_length is not None else sec.mass / length
+        return Section.from_stiffness(sec.EA, sec.EI, mpl, fibre_distance=sec.fibre,
+                                      youngs_modulus=sec.E)
     d = sec.diameter
     area = sec.A if sec.A is not None else math.pi * d * d / 4.0
     inertia = sec.I if sec.I is not None else math.pi * d**4 / 64.0
@@ -75,6 +81,20 @@ def section_of(beam: S.BeamSpec, length: float) -> Section:
         mpl = sec.mass / length
     fibre = sec.fibre if sec.fibre is not None else (d / 2.0 if d is not None else None)
     return Section(sec.E, area, inertia, mpl, fibre_distance=fibre)
+
+
+def law_of(spec):
+    """The :mod:`ancf_jax.element.laws` law of a law table (None: none given)."""
+    if spec is None:
+        return None
+    if spec.type == "linear":
+        return laws.LinearElastic()
+    if spec.type == "strain_rate_damped":
+        return laws.StrainRateDamped(spec.damping)
+    if spec.type == "bilinear":
+        return laws.Bilinear(spec.tension, spec.compression)
+    table = np.asarray(spec.table, float)
+    return laws.Tabulated(table[:, 0], table[:, 1])
 
 
 def nominal_length(beam: S.BeamSpec, mesh: _mesh.BeamMesh) -> float:
@@ -121,7 +141,8 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
                                       bending_quadrature=tuple(f.bending_quadrature))
             nodes, vel = initial_nodes(b, mesh, length)
             m.add_beam(name, mesh, section, alpha=b.alpha, beta=b.beta, formulation=formulation,
-                       initial_nodes=nodes, initial_velocities=vel)
+                       initial_nodes=nodes, initial_velocities=vel, gravity=b.gravity,
+                       axial_law=law_of(b.axial_law), bending_law=law_of(b.bending_law))
             shapes[name] = (Beam(mesh, section), np.asarray(mesh.reference_nodes) if nodes is None else nodes)
 
     poses: dict[str, tuple[float, float, float]] = {}
@@ -132,8 +153,12 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
             else:
                 position = b.position if b.position is not None else (0.0, 0.0)
             poses[name] = (position[0], position[1], b.angle)
-            m.add_body(name, mass=b.mass, inertia=b.inertia, position=position, angle=b.angle,
-                       velocity=b.velocity, angular_velocity=b.angular_velocity)
+            if b.point_mass:
+                m.add_point_mass(name, mass=b.mass, position=position, velocity=b.velocity,
+                                 gravity=b.gravity)
+            else:
+                m.add_body(name, mass=b.mass, inertia=b.inertia, position=position, angle=b.angle,
+                           velocity=b.velocity, angular_velocity=b.angular_velocity, gravity=b.gravity)
 
     for name, j in spec.joints.items():
         with _located(file, ("joints", name)):
@@ -148,6 +173,9 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
             elif j.type == "sliding":
                 m.slider(name, j.body, j.beam, on_beam(j.s, lengths[j.beam]), local=j.local, hold=j.hold,
                          rate=j.rate)
+            elif j.type == "coordinate":
+                m.coordinate(name, point_ref(spec, lengths, j.point), j.component, value=j.value,
+                             function=j.function)
             elif j.type == "prescribed_point":
                 m.prescribe_point(name, point_ref(spec, lengths, j.point), PointPath(j.x, j.y))
             else:
@@ -159,6 +187,8 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
                 m.point_force(name, point_ref(spec, lengths, f.point), f.force, f.time_function)
             elif f.type == "torque":
                 m.torque(name, f.body, f.torque, f.time_function)
+            elif f.type == "mass_proportional":
+                m.mass_proportional_load(name, f.item, f.acceleration, f.time_function)
             else:
                 m.spring_damper(name, point_ref(spec, lengths, f.a), point_ref(spec, lengths, f.b),
                                 stiffness=f.stiffness, damping=f.damping, rest_length=f.rest_length)

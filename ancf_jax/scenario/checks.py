@@ -15,6 +15,7 @@ import re
 import numpy as np
 
 from . import schema as S
+from ..errors import ModelError
 from .errors import Invalid
 from .types import TimeFunctionSpec
 from .geometry import element_count, first_node, reference_length
@@ -96,6 +97,8 @@ class Checker:
                 raise Invalid(path + ("point",), "give local or point, not both", POINT_FORMS)
             if ref.point is not None:
                 self.body_point(path + ("point",), ref.body, ref.point)
+            if ref.local is not None and any(ref.local):
+                self.rotating(path + ("local",), ref.body, "a body point away from the centre")
         elif kind == "beam":
             self.beam(path + ("beam",), ref.beam)
             if (ref.node is None) == (ref.s is None):
@@ -172,14 +175,49 @@ class Checker:
             self.elements[name] = element_count(b)
             self.lengths[name] = reference_length(g, self.elements[name])
             self.section(path + ("section",), b.section)
+            self.laws(path, b)
             if b.formulation.curvature == "small_strain" and not isinstance(g, S.Straight):
                 raise Invalid(path + ("formulation", "curvature"),
                               "small_strain (Eq. 17) needs a straight reference geometry",
                               '"exact" or "material" for a curved beam')
             self.initial(path + ("initial",), name, b)
 
+    def laws(self, path, b: S.BeamSpec):
+        from ..element.laws import Tabulated
+        for key in ("axial_law", "bending_law"):
+            law = getattr(b, key)
+            if law is None:
+                continue
+            if key == "bending_law" and b.formulation.curvature == "small_strain":
+                raise Invalid(path + (key,), "a bending law needs the exact or material curvature",
+                              'formulation.curvature = "exact" or "material", or no bending_law')
+            if law.type == "tabulated":
+                table = np.asarray(law.table, float)
+                try:
+                    Tabulated(table[:, 0], table[:, 1])
+                except ModelError as err:
+                    raise Invalid(path + (key, "table"), str(err).removeprefix("tabulated law: "),
+                                  "at least 2 rows [strain, force], both increasing, through [0, 0]") from None
+
     def section(self, path, sec: S.SectionSpec):
         self.exclusive(path, sec, ("mass_per_length", "density", "mass"), required=True)
+        stiff = [k for k in ("EA", "EI") if getattr(sec, k) is not None]
+        geometric = [k for k in ("A", "I", "diameter") if getattr(sec, k) is not None]
+        if stiff and geometric:
+            raise Invalid(path + (geometric[0],), f"{geometric[0]} cannot be given together with "
+                          f"{stiff[0]}", "either E with A and I (or diameter), or EA and EI")
+        if stiff:
+            if len(stiff) == 1:
+                other = "EI" if stiff[0] == "EA" else "EA"
+                raise Invalid(path + (other,), f"missing required key (given {stiff[0]})",
+                              "EA [N] and EI [N·m²], both > 0")
+            if sec.density is not None:
+                raise Invalid(path + ("density",), "density needs the area A (the section is given "
+                              "by EA and EI)", "mass_per_length or mass")
+            return
+        if sec.E is None:
+            raise Invalid(path + ("E",), "missing required key: give E with A and I (or diameter), "
+                          "or EA and EI", "a number > 0 [Pa]")
         for k in ("A", "I"):
             if getattr(sec, k) is None and sec.diameter is None:
                 raise Invalid(path + (k,), "missing required key (no diameter given)",
@@ -225,6 +263,14 @@ class Checker:
         for name, b in self.spec.bodies.items():
             path = ("bodies", name)
             self.exclusive(path, b, ("position", "at"))
+            if b.point_mass:
+                for k, unset in (("inertia", None), ("angle", 0.0), ("angular_velocity", None), ("points", {})):
+                    if getattr(b, k) != unset:
+                        raise Invalid(path + (k,), f"{k} does not go with point_mass = true",
+                                      "mass, position or at, velocity, gravity")
+            elif b.inertia is None:
+                raise Invalid(path + ("inertia",), "missing required key", "a number > 0 [kg·m²] "
+                              "(or point_mass = true)")
             if b.at is not None:
                 self.point(path + ("at",), b.at, before_body=name)
 
@@ -239,11 +285,40 @@ class Checker:
             elif j.type == "revolute":
                 self.point(path + ("a",), j.a)
                 self.point(path + ("b",), j.b)
+            elif j.type == "coordinate":
+                self.coordinate(path, j)
             if j.type in ("fixed", "sliding", "prescribed_body"):
                 self.body(path + ("body",), j.body)
+            if j.type == "fixed":
+                self.rotating(path + ("body",), j.body, "a fixed joint")
+            if j.type == "prescribed_body" and j.coordinate == "theta":
+                self.rotating(path + ("body",), j.body, "a prescribed theta")
+            if j.type == "sliding" and any(j.local):
+                self.rotating(path + ("local",), j.body, "a sliding point away from the centre")
             if j.type == "sliding":
                 self.beam(path + ("beam",), j.beam)
                 self.arc_length(path + ("s",), j.beam, j.s, "initial arc length s =")
+
+    def rotating(self, path, body, what):
+        if self.spec.bodies[body].point_mass:
+            raise Invalid(path, f'"{body}" is a point mass (translation only): {what} needs a rotation',
+                          "a rigid body with an inertia")
+
+    def coordinate(self, path, j: S.CoordinateSpec):
+        p = j.point
+        node = p.beam is not None and p.node is not None and p.body is None and p.ground is None
+        body = p.body is not None and p.local is None and p.point is None and p.beam is None and p.ground is None
+        if not (node or body):
+            raise Invalid(path + ("point",), "not a beam node or a body's centre",
+                          '{ beam = "a", node = i } or { body = "b" }')
+        self.point(path + ("point",), p)
+        allowed = ("x", "y", "slope_x", "slope_y") if node else ("x", "y", "theta")
+        if j.component not in allowed:
+            raise Invalid(path + ("component",), f'"{j.component}" is not a coordinate of a '
+                          f'{"beam node" if node else "body"}', ", ".join(allowed))
+        self.exclusive(path, j, ("value", "function"))
+        if body and j.component == "theta":
+            self.rotating(path + ("point", "body"), p.body, "a constrained theta")
 
     def loads(self):
         for name, f in self.spec.loads.items():
@@ -252,6 +327,11 @@ class Checker:
                 self.point(path + ("point",), f.point)
             elif f.type == "torque":
                 self.body(path + ("body",), f.body)
+                self.rotating(path + ("body",), f.body, "a torque")
+            elif f.type == "mass_proportional":
+                if f.item not in self.spec.beams and f.item not in self.spec.bodies:
+                    raise Invalid(path + ("item",), f'"{f.item}" is no beam or body',
+                                  f"the name of a beam or body: {_names({**self.spec.beams, **self.spec.bodies})}")
             else:
                 self.point(path + ("a",), f.a)
                 self.point(path + ("b",), f.b)
@@ -300,6 +380,11 @@ class Checker:
             path = ("outputs", "columns", name)
             if o.type in ("node", "point", "stress"):
                 self.beam(path + ("beam",), o.beam)
+            if o.type == "stress":
+                sec = self.spec.beams[o.beam].section
+                if sec.EA is not None and sec.E is None:
+                    raise Invalid(path, f'a stress needs Young\'s modulus: beam "{o.beam}" has EA and EI only',
+                                  f"key E in beams.{o.beam}.section (or no stress output)")
             if o.type == "node":
                 self.node_index(path + ("node",), o.beam, o.node)
             elif o.type == "point":

@@ -99,10 +99,14 @@ Geometry = Annotated[Union[Straight, ThroughPoints, Arc], Field(discriminator="t
 
 
 class SectionSpec(Table):
-    """Cross-section and material. Give E; A and I, or a diameter (solid circle) from
-    which missing A and I follow; and exactly one of mass_per_length, density, mass."""
+    """Cross-section and material. Give either E with A and I, or a diameter (solid
+    circle) from which missing A and I follow; or the stiffnesses EA and EI as Exudyn
+    takes them (then E is optional, for stresses only); and exactly one of
+    mass_per_length, density, mass (density needs A)."""
 
-    E: float = key(unit="Pa", gt=0.0, allow_inf_nan=False, doc="Young's modulus")
+    E: Optional[float] = key(None, unit="Pa", gt=0.0, allow_inf_nan=False,
+                             doc="Young's modulus (required with A, I or diameter; with EA and EI "
+                                 "only for stresses)")
     A: Optional[float] = key(None, unit="m²", gt=0.0, allow_inf_nan=False,
                              doc="area (default π d²/4 from diameter)")
     I: Optional[float] = key(None, unit="m⁴", gt=0.0, allow_inf_nan=False,
@@ -117,6 +121,10 @@ class SectionSpec(Table):
                                 doc="total mass of the beam (ρA = mass / L)")
     fibre: Optional[float] = key(None, unit="m", gt=0.0, allow_inf_nan=False,
                                  doc="outer-fibre distance for stresses (default d/2, else √(2I/A))")
+    EA: Optional[float] = key(None, unit="N", gt=0.0, allow_inf_nan=False,
+                              doc="axial stiffness (instead of E·A; give EI too)")
+    EI: Optional[float] = key(None, unit="N·m²", gt=0.0, allow_inf_nan=False,
+                              doc="bending stiffness (instead of E·I; give EA too)")
 
 
 class FormulationSpec(Table):
@@ -127,6 +135,41 @@ class FormulationSpec(Table):
                                                       "small_strain (Eq. 17, straight beams only)")
     axial_quadrature: Quadrature = key(("lobatto", 3), doc="[kind, points] of the axial term")
     bending_quadrature: Quadrature = key(("gauss", 3), doc="[kind, points] of the bending term")
+
+
+class LinearLawSpec(Table):
+    """Linear elastic: N = EA ε (axial), M = EI (κ − κ₀) (bending), the default."""
+
+    type: Literal["linear"] = key(doc="law type")
+
+
+class StrainRateDampedLawSpec(Table):
+    """Linear elastic with strain-rate damping, N = EA ε + d ε̇ (Exudyn's axialDamping
+    and bendingDamping); the rate term is a dissipation."""
+
+    type: Literal["strain_rate_damped"] = key(doc="law type")
+    damping: float = key(unit="N·s or N·m²·s", ge=0.0, allow_inf_nan=False, doc="d (d_A axial, d_K bending)")
+
+
+class BilinearLawSpec(Table):
+    """Different stiffness in tension and compression: N = k_t γ (γ ≥ 0), k_c γ (γ < 0);
+    the section's EA or EI is not used."""
+
+    type: Literal["bilinear"] = key(doc="law type")
+    tension: float = key(unit="N or N·m²", gt=0.0, allow_inf_nan=False, doc="k_t")
+    compression: float = key(unit="N or N·m²", gt=0.0, allow_inf_nan=False, doc="k_c")
+
+
+class TabulatedLawSpec(Table):
+    """A nonlinear elastic law N(γ) piecewise linear through [γ, N] rows (increasing, through
+    [0, 0]), extended with the end slopes; the energy is its exact integral."""
+
+    type: Literal["tabulated"] = key(doc="law type")
+    table: Points2 = key(unit="-, N or 1/m, N·m", doc="rows [strain, force] (axial) or [curvature change, moment]")
+
+
+Law = Annotated[Union[LinearLawSpec, StrainRateDampedLawSpec, BilinearLawSpec, TabulatedLawSpec],
+                Field(discriminator="type")]
 
 
 class BeamInitial(Table):
@@ -156,14 +199,20 @@ class BeamSpec(Table):
                       doc="Rayleigh stiffness-proportional damping β (Eq. 11)")
     formulation: FormulationSpec = key(FormulationSpec(), doc="strain measures and quadrature")
     initial: BeamInitial = key(BeamInitial(), doc="initial shape and velocity")
+    gravity: bool = key(True, doc="whether gravity acts on this beam")
+    axial_law: Optional[Law] = key(None, doc="material law N(ε, ε̇) (default linear: N = EA ε)")
+    bending_law: Optional[Law] = key(None, doc="material law M(κ, κ̇) (default linear: M = EI (κ − κ₀); "
+                                               "others need curvature exact or material)")
 
 
 # ----------------------------------------------------------------------------- bodies
 class BodySpec(Table):
-    """A rigid body (paper Eq. 14): coordinates x, y of its centre and angle θ."""
+    """A rigid body (paper Eq. 14): coordinates x, y of its centre and angle θ; or, with
+    point_mass = true, a point mass (translation only, no inertia, angle or points)."""
 
     mass: float = key(unit="kg", gt=0.0, allow_inf_nan=False, doc="mass m")
-    inertia: float = key(unit="kg·m²", gt=0.0, allow_inf_nan=False, doc="moment of inertia J about the centre")
+    inertia: Optional[float] = key(None, unit="kg·m²", gt=0.0, allow_inf_nan=False,
+                                   doc="moment of inertia J about the centre (required unless point_mass)")
     position: Optional[Vec2] = key(None, unit="m", doc="initial position of the centre (default [0, 0])")
     at: Optional[PointRef] = key(None, doc="instead of position: the centre starts at this point of a "
                                            "beam's initial shape or of a body declared earlier")
@@ -174,6 +223,9 @@ class BodySpec(Table):
                                             doc="initial angular velocity (default: not given, set by "
                                                 "the joints, else 0)")
     points: dict[str, Vec2] = key({}, unit="m", doc="named points in the body frame, e.g. { hook = [0, 0.5] }")
+    point_mass: bool = key(False, doc="a point mass (Exudyn's MassPoint2D): translation only; fixed joints, "
+                                      "torques and points away from the centre are refused")
+    gravity: bool = key(True, doc="whether gravity acts on this body")
 
 
 # ----------------------------------------------------------------------------- joints
@@ -183,8 +235,9 @@ class ClampSpec(Table):
     type: Literal["clamp"] = key(doc="joint type")
     beam: str = key(doc="beam name")
     node: int = key(0, doc="node index (−1: the last)")
-    mode: Literal["full", "direction"] = key("full", doc="full: slope vector fixed (4 equations); "
-                                                         "direction: slope direction only (3)")
+    mode: Literal["full", "direction", "exudyn"] = key(
+        "full", doc="full: slope vector fixed (4 equations); direction: slope direction only (3); "
+                    "exudyn: x, y and r'_y fixed (3, Exudyn's clamp)")
 
 
 class PinSpec(Table):
@@ -229,6 +282,19 @@ class SlidingSpec(Table):
                                 "(initial.mode = static), free from t = 0; true: held for the whole run")
 
 
+class CoordinateSpec(Table):
+    """One coordinate of a beam node or a body held at a value or following a function
+    of time (Exudyn's CoordinateConstraint to the ground)."""
+
+    type: Literal["coordinate"] = key(doc="joint type")
+    point: PointRef = key(doc="a beam node { beam, node } or a body's centre { body }")
+    component: Literal["x", "y", "slope_x", "slope_y", "theta"] = key(
+        doc="node: x, y, slope_x, slope_y (r_x, r_y, r'_x, r'_y); body: x, y, theta")
+    value: Optional[float] = key(None, unit="m, -, rad", allow_inf_nan=False,
+                                 doc="value held (default the initial value)")
+    function: Optional[TimeFunction] = key(None, unit="m, -, rad", doc="instead of value: the value over time")
+
+
 class PrescribedPointSpec(Table):
     """A point follows (x(t), y(t)) [m]."""
 
@@ -248,7 +314,8 @@ class PrescribedBodySpec(Table):
 
 
 Joint = Annotated[Union[ClampSpec, PinSpec, RevoluteSpec, FixedSpec, SlidingSpec,
-                        PrescribedPointSpec, PrescribedBodySpec], Field(discriminator="type")]
+                        PrescribedPointSpec, PrescribedBodySpec, CoordinateSpec],
+                  Field(discriminator="type")]
 
 
 # ----------------------------------------------------------------------------- loads
@@ -282,7 +349,18 @@ class SpringDamperSpec(Table):
                                        doc="ℓ₀ (default: the initial distance)")
 
 
-Load = Annotated[Union[PointForceSpec, TorqueSpec, SpringDamperSpec], Field(discriminator="type")]
+class MassProportionalSpec(Table):
+    """A load m·a·f(t) on one beam or body only (Exudyn's LoadMassProportional): on a body
+    at its centre, on a beam the consistent load of ρA·a."""
+
+    type: Literal["mass_proportional"] = key(doc="load type")
+    item: str = key(doc="a beam's or body's name")
+    acceleration: Vec2 = key(unit="m/s²", doc="acceleration a")
+    time_function: Optional[TimeFunction] = key(None, doc="scale f(t) (default 1)")
+
+
+Load = Annotated[Union[PointForceSpec, TorqueSpec, SpringDamperSpec, MassProportionalSpec],
+                 Field(discriminator="type")]
 
 
 # ----------------------------------------------------------------------------- state, solvers
@@ -481,6 +559,9 @@ class OutputsSpec(Table):
     dt: Optional[float] = key(None, unit="s", gt=0.0, allow_inf_nan=False,
                               doc="sample interval (default every solver step)")
     columns: dict[str, Output] = key({}, doc="named output columns (the CSV header)")
+    precision: Optional[int] = key(None, ge=1, le=17, doc="significant digits of the CSV values (default: "
+                                                           "the shortest text that reads back to the same "
+                                                           "double, a full round trip)")
 
 
 # ----------------------------------------------------------------------------- fatigue

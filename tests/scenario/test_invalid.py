@@ -39,6 +39,32 @@ CASES = [
     ("missing solver table", replaced(('[solver]\nname = "generalized-alpha"\ndt = 1e-3\nt_end = 0.01\n', "")),
      "solver", "a table with keys name, dt, t_end"),
     ("missing E", replaced(("E = 2e11\n", "")), "beams.arm.section.E", "a number > 0 [Pa]"),
+    ("section by both E, A, I and EA, EI", replaced(("density = 7800.0", "density = 7800.0\nEA = 2e7\nEI = 200.0")),
+     "beams.arm.section.A", "either E with A and I (or diameter), or EA and EI"),
+    ("coordinate of a beam point", added('[joints.c]\ntype = "coordinate"\npoint = { beam = "arm", s = 0.5 }\n'
+                                          'component = "y"'), "joints.c.point", '{ beam = "a", node = i } or { body = "b" }'),
+    ("theta of a beam node", added('[joints.c]\ntype = "coordinate"\npoint = { beam = "arm", node = 1 }\n'
+                                   'component = "theta"'), "joints.c.component", "x, y, slope_x, slope_y"),
+    ("fixed joint to a point mass", replaced(("mass = 1.0\ninertia = 0.1", "mass = 1.0\npoint_mass = true")),
+     "joints.tip.body", "a rigid body with an inertia"),
+    ("local point of a point mass", replaced(("mass = 0.5\ninertia = 0.01", "mass = 0.5\npoint_mass = true"))
+     .replace("[solver]", '[joints.r]\ntype = "revolute"\na = { body = "trolley", local = [0.1, 0.0] }\n'
+              'b = { ground = [0.0, 0.0] }\n\n[solver]'), "joints.r.a.local", "a rigid body with an inertia"),
+    ("point mass with an inertia", replaced(("mass = 0.5\ninertia = 0.01", "mass = 0.5\ninertia = 0.01\npoint_mass = true")),
+     "bodies.trolley.inertia", "mass, position or at"),
+    ("body without inertia", replaced(("mass = 0.5\ninertia = 0.01", "mass = 0.5")), "bodies.trolley.inertia",
+     "a number > 0 [kg·m²]"),
+    ("mass-proportional load on a joint", added('[loads.g]\ntype = "mass_proportional"\nitem = "clamp"\n'
+                                                 'acceleration = [0.0, -1.0]'), "loads.g.item", "the name of a beam or body"),
+    ("tabulated law off the origin", replaced(("alpha = 0.1\n", 'alpha = 0.1\naxial_law = { type = "tabulated", '
+                                                                  'table = [[-0.01, -1.0], [0.01, 3.0]] }\n')),
+     "beams.arm.axial_law.table", "through [0, 0]"),
+    ("unknown law", replaced(("alpha = 0.1\n", 'alpha = 0.1\nbending_law = { type = "plastic" }\n')),
+     "beams.arm.bending_law.type", '"linear", "strain_rate_damped"'),
+    ("stress of a section without E", replaced(("E = 2e11\nA = 1e-4\nI = 1e-9\ndensity = 7800.0", "EA = 2e7\nEI = 200.0\nmass = 7.8"))
+     + '\nsig = { type = "stress", beam = "arm", s = 0.2 }', "outputs.columns.sig", "key E in beams.arm.section"),
+    ("EA without EI", replaced(("E = 2e11\nA = 1e-4\nI = 1e-9\ndensity = 7800.0", "EA = 2e7\nmass = 7.8")),
+     "beams.arm.section.EI", "EA [N] and EI [N·m²]"),
     ("missing joint type", replaced(('type = "clamp"\n', "")), "joints.clamp.type", '"clamp", "pin"'),
     ("missing elements", replaced(("elements = 4\n", "")), "beams.arm.elements", "an integer 1 .. 2000"),
     ("missing mass of section", replaced(("density = 7800.0\n", "")), "beams.arm.section",

@@ -1,0 +1,1 @@
+"""Translation from other multibody codes (:mod:`ancf_jax.interop.exudyn`)."""
