@@ -27,7 +27,7 @@ the element's few coordinates, not by the size of the system.
 from __future__ import annotations
 
 import abc
-from typing import Callable, Optional
+from typing import Callable, ClassVar, Optional
 
 import equinox as eqx
 import jax
@@ -190,3 +190,92 @@ class SpringDamper(AbstractForce):
 
     def coordinates(self, system, q):
         return jnp.concatenate([self.a.coordinates(system, q), self.b.coordinates(system, q)])
+
+
+class AbstractOneSidedSpringDamper(AbstractForce):
+    """A spring-damper between two points that acts on one side only: a rope, dropper or
+    hanger (tension only) or a stop or buffer (compression only).
+
+    With x = ℓ − ℓ₀ the extension and σ = :attr:`sense` (+1: tension only, −1:
+    compression only), the member is engaged while σx > 0, with the engaged extension
+    e = max(σx, 0) [m]. Its parts:
+
+    * potential V = ½ k e² [J] (conservative, C¹ in q: the force is continuous at
+      the slack/taut transition, the stiffness jumps from 0 to k);
+    * damping only while engaged, limited so that the member never pushes (tension
+      only) or pulls (compression only): d = max(c σℓ̇, −k e) if e > 0 else 0 [N], so
+      the member force σ(k e + d) has the sign σ or is zero. Its power d σℓ̇ ≥ 0 is
+      dissipation in the energy balance.
+
+    :meth:`tension` is the member force [N] (positive in tension); :meth:`engaged`
+    the taut (or, compression only, the closed) state.
+
+    Attributes:
+        stiffness: k [N/m].
+        damping: c [N·s/m].
+        rest_length: ℓ₀ [m] (slack length of a rope, gap of a stop).
+    """
+
+    a: AbstractPoint
+    b: AbstractPoint
+    stiffness: jnp.ndarray
+    damping: jnp.ndarray
+    rest_length: jnp.ndarray
+
+    @property
+    @abc.abstractmethod
+    def sense(self) -> float:
+        """σ: +1 (tension only) or −1 (compression only)."""
+
+    def length(self, system, q):
+        """Current distance ℓ between the points [m]."""
+        d = self.a.position(system, q) - self.b.position(system, q)
+        return jnp.sqrt(jnp.dot(d, d))
+
+    def engaged_extension(self, system, q):
+        """e = max(σ (ℓ − ℓ₀), 0) [m]."""
+        return jnp.maximum(self.sense * (self.length(system, q) - self.rest_length), 0.0)
+
+    def engaged(self, system, q):
+        """Whether the member is taut (tension only) or closed (compression only)."""
+        return self.engaged_extension(system, q) > 0.0
+
+    def _damper(self, system, q, v):
+        """The limited damper force d [N] (class docstring)."""
+        e = self.engaged_extension(system, q)
+        ell_dot = jax.jvp(lambda qq: self.length(system, qq), (q,), (v,))[1]
+        d = jnp.where(e > 0.0, jnp.maximum(self.damping * self.sense * ell_dot, -self.stiffness * e), 0.0)
+        return d
+
+    def tension(self, system, q, v):
+        """Member force σ (k e + d) [N], positive in tension, zero while disengaged."""
+        e = self.engaged_extension(system, q)
+        return self.sense * (self.stiffness * e + self._damper(system, q, v))
+
+    def potential(self, system, q, t):
+        return 0.5 * self.stiffness * self.engaged_extension(system, q) ** 2
+
+    def applied_force(self, system, q, v, t):
+        return jnp.zeros_like(q)
+
+    def dissipative_force(self, system, q, v):
+        d = self._damper(system, q, v)
+        _, vjp = jax.vjp(lambda qq: self.length(system, qq), q)
+        return vjp(-self.sense * d)[0]
+
+    def coordinates(self, system, q):
+        return jnp.concatenate([self.a.coordinates(system, q), self.b.coordinates(system, q)])
+
+
+class TensionOnlySpringDamper(AbstractOneSidedSpringDamper):
+    """A rope, dropper or hanger: resists extension only (σ = +1,
+    :class:`AbstractOneSidedSpringDamper`)."""
+
+    sense: ClassVar[float] = 1.0
+
+
+class CompressionOnlySpringDamper(AbstractOneSidedSpringDamper):
+    """A stop or buffer: resists shortening only (σ = −1,
+    :class:`AbstractOneSidedSpringDamper`)."""
+
+    sense: ClassVar[float] = -1.0

@@ -36,7 +36,8 @@ from .beam import Beam
 from .bodies import RigidBodies
 from .element.strain_energy import Formulation
 from .errors import ConstraintError, ModelError, VelocityProjectionWarning
-from .forces import PointForce, PointTorque, SpringDamper
+from .forces import (CompressionOnlySpringDamper, PointForce, PointTorque, SpringDamper,
+                     TensionOnlySpringDamper)
 from .mesh import BeamMesh, pad
 from .newton import ModifiedNewton
 from .section import Section
@@ -281,14 +282,22 @@ class Model:
         return name
 
     def spring_damper(self, name: str, a: PointRef, b: PointRef, *, stiffness, damping=0.0,
-                      rest_length=None) -> str:
+                      rest_length=None, acts: str = "both") -> str:
         """Linear spring-damper between two points; rest length defaults to the
-        initial distance."""
+        initial distance.
+
+        ``acts``: ``"both"`` (default, :class:`~ancf_jax.forces.SpringDamper`),
+        ``"tension"`` (a rope, dropper or hanger: slack while shorter than the rest
+        length) or ``"compression"`` (a stop or buffer: open while longer), see
+        :class:`~ancf_jax.forces.AbstractOneSidedSpringDamper`.
+        """
         k = check_nonnegative(f"stiffness of {name!r}", stiffness, "N/m")
         c = check_nonnegative(f"damping of {name!r}", damping, "N*s/m")
         l0 = None if rest_length is None else check_nonnegative(f"rest_length of {name!r}", rest_length, "m")
+        check_choice(f"acts of spring-damper {name!r}", acts, ("both", "tension", "compression"))
         self._claim(name, "force")
-        self._forces.append(("spring_damper", name, dict(a=a, b=b, stiffness=k, damping=c, rest_length=l0)))
+        self._forces.append(("spring_damper", name, dict(a=a, b=b, stiffness=k, damping=c, rest_length=l0,
+                                                         acts=acts)))
         return name
 
     # ------------------------------------------------------------------ names
@@ -533,8 +542,10 @@ class Model:
                 l0 = a["rest_length"]
                 if l0 is None:
                     l0 = float(np.linalg.norm(initial_position(pa) - initial_position(pb)))
-                forces.append(SpringDamper(name, pa, pb, jnp.asarray(a["stiffness"], float),
-                                           jnp.asarray(a["damping"], float), jnp.asarray(l0, float)))
+                law = {"both": SpringDamper, "tension": TensionOnlySpringDamper,
+                       "compression": CompressionOnlySpringDamper}[a["acts"]]
+                forces.append(law(name, pa, pb, jnp.asarray(a["stiffness"], float),
+                                  jnp.asarray(a["damping"], float), jnp.asarray(l0, float)))
 
         system = System(bodies, tuple(beams), tuple(constraints), tuple(forces),
                         jnp.asarray(self.gravity, float), n_sliding=len(slider_names),

@@ -19,6 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .errors import ModelError
+from .forces import AbstractOneSidedSpringDamper, SpringDamper
 from .joints import SlidingJoint
 from .system import System
 
@@ -39,6 +40,19 @@ def _violations(system: System, q, v, t):
         return jnp.stack([jnp.max(jnp.abs(system.constraint(qq, tt))),
                           jnp.max(jnp.abs(system.constraint_velocity(qq, vv, tt)))])
     return jax.vmap(one)(q, v, t)
+
+
+@eqx.filter_jit
+def _member_history(system: System, force, q, v):
+    """(tension [N], engaged 0/1) of a spring-damper per row, shape (N, 2)."""
+    def one(qq, vv):
+        if isinstance(force, SpringDamper):
+            ell = force.length(system, qq)
+            ell_dot = jax.jvp(lambda z: force.length(system, z), (qq,), (vv,))[1]
+            return jnp.stack([force.stiffness * (ell - force.rest_length) + force.damping * ell_dot,
+                              jnp.ones(())])
+        return jnp.stack([force.tension(system, qq, vv), force.engaged(system, qq).astype(qq.dtype)])
+    return jax.vmap(one)(q, v)
 
 
 # jitted histories over the output rows; numeric parameters are traced (no recompiling
@@ -195,6 +209,20 @@ class Results:
         tangent = tangent / np.linalg.norm(tangent, axis=1, keepdims=True)
         normal = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
         return np.stack([np.sum(force * normal, axis=1), np.sum(force * tangent, axis=1)], axis=1)
+
+    def force_element(self, name: str):
+        """The force element called ``name`` of the system."""
+        names = tuple(f.name for f in self.system.forces)
+        return self.system.forces[self._index(names, name, "force element")]
+
+    def member(self, name: str) -> np.ndarray:
+        """Member force [N] (positive in tension) and engaged state (1: taut or closed,
+        0: slack or open; linear spring-dampers are always 1) of a spring-damper,
+        shape (N, 2)."""
+        f = self.force_element(name)
+        if not isinstance(f, (SpringDamper, AbstractOneSidedSpringDamper)):
+            raise ModelError(f"force element {name!r} is not a spring-damper")
+        return np.asarray(_member_history(self.system, f, jnp.asarray(self.q), jnp.asarray(self.v)))
 
     # ------------------------------------------------------------------ stress
     def stress(self, beam: str, s: float, y: float | None = None, measure: str = "exact") -> np.ndarray:

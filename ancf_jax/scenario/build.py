@@ -161,7 +161,8 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
                 m.torque(name, f.body, f.torque, f.time_function)
             else:
                 m.spring_damper(name, point_ref(spec, lengths, f.a), point_ref(spec, lengths, f.b),
-                                stiffness=f.stiffness, damping=f.damping, rest_length=f.rest_length)
+                                stiffness=f.stiffness, damping=f.damping, rest_length=f.rest_length,
+                                acts=f.acts)
     return m
 
 
@@ -218,6 +219,8 @@ def make_outputs(spec: S.ScenarioSpec) -> list[Output]:
         elif o.type == "reaction":
             out.append(Output(name, "reaction", o.joint,
                               o.component if o.component is not None else str(o.index)))
+        elif o.type == "member":
+            out.append(Output(name, "member", o.load, o.component))
         else:
             out.append(Output(name, "energy", "", o.component))
     return out

@@ -334,6 +334,14 @@ class Checker:
                     raise Invalid(path + ("index",), f'joint "{o.joint}" has {size} equations',
                                   f"an integer 0 .. {size - 1}")
 
+            elif o.type == "member":
+                f = self.spec.loads.get(o.load)
+                if f is None or f.type != "spring_damper":
+                    known = ", ".join(f'"{n}"' for n, l in self.spec.loads.items()
+                                      if l.type == "spring_damper") or "none"
+                    raise Invalid(path + ("load",), f'"{o.load}" is not a spring_damper of [loads]',
+                                  f"one of: {known}")
+
     def fatigue(self):
         f = self.spec.fatigue
         if f.mean_stress != "none" and f.ultimate_strength is None:

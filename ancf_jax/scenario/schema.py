@@ -280,6 +280,10 @@ class SpringDamperSpec(Table):
     damping: float = key(0.0, unit="N·s/m", ge=0.0, allow_inf_nan=False, doc="c")
     rest_length: Optional[float] = key(None, unit="m", ge=0.0, allow_inf_nan=False,
                                        doc="ℓ₀ (default: the initial distance)")
+    acts: Literal["both", "tension", "compression"] = key(
+        "both", doc="both; tension: a rope, dropper or hanger (slack while ℓ < ℓ₀); compression: "
+                    "a stop or buffer (open while ℓ > ℓ₀). One-sided members damp only while engaged "
+                    "and never push (pull)")
 
 
 Load = Annotated[Union[PointForceSpec, TorqueSpec, SpringDamperSpec], Field(discriminator="type")]
@@ -471,8 +475,18 @@ class EnergyOutput(Table):
     component: Literal[COMPONENTS["energy"]] = key("total", unit="J", doc="which energy")
 
 
+class MemberOutput(Table):
+    """The force of a spring-damper (positive in tension) or its engaged state (1: taut
+    or closed, 0: slack or open)."""
+
+    type: Literal["member"] = key(doc="output type")
+    load: str = key(doc="spring-damper name (in [loads])")
+    component: Literal[COMPONENTS["member"]] = key("tension", unit="N, -", doc="force or state")
+
+
 Output = Annotated[Union[NodeOutput, PointOutput, BodyOutput, SlidingOutput, SlidingPointOutput,
-                         StressOutput, ReactionOutput, EnergyOutput], Field(discriminator="type")]
+                         StressOutput, ReactionOutput, EnergyOutput, MemberOutput],
+                   Field(discriminator="type")]
 
 
 class OutputsSpec(Table):
