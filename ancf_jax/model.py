@@ -32,7 +32,7 @@ import numpy as np
 from . import dae
 from . import joints as J
 from . import points as P
-from .beam import Beam
+from .beam import AttachedMasses, Beam
 from .bodies import RigidBodies
 from .element.strain_energy import Formulation
 from .errors import ConstraintError, ModelError, VelocityProjectionWarning
@@ -108,6 +108,7 @@ class Model:
         self._sliders: dict[str, dict] = {}
         self._joints: list[tuple[str, str, dict]] = []
         self._forces: list[tuple[str, str, dict]] = []
+        self._attached: list[tuple[str, str, float, float]] = []
         self._names: set[str] = set()
 
     # ------------------------------------------------------------------ entities
@@ -185,6 +186,17 @@ class Model:
             vel[2] = float(w)
         self._claim(name, "body")
         self._bodies[name] = _BodySpec(m, j, pose, vel, given)
+        return name
+
+    def attached_mass(self, name: str, beam: str, s: float, mass: float) -> str:
+        """A point mass ``mass`` [kg] > 0 fixed to the material point of ``beam`` at
+        reference arc length ``s`` [m] (a clamp or spacer on a wire), translation only:
+        consistent added mass m Sᵀ S and its weight, see
+        :class:`~ancf_jax.beam.AttachedMasses`."""
+        m = check_positive(f"mass of attached mass {name!r}", mass, "kg")
+        s0 = check_nonnegative(f"arc length s of attached mass {name!r}", s, "m")
+        self._claim(name, "attached mass")
+        self._attached.append((name, beam, float(s0), float(m)))
         return name
 
     # ------------------------------------------------------------------ joints
@@ -386,6 +398,10 @@ class Model:
             body(a["body"], what)
             beam(a["beam"], what)
             arc_ok(a["beam"], a["s"], what, "initial arc length s =")
+        for name, b, s, _ in self._attached:
+            what = f"attached mass {name!r}"
+            beam(b, what)
+            arc_ok(b, s, what)
         for kind, name, a in self._forces:
             what = f"force {name!r}"
             if kind == "torque":
@@ -431,8 +447,11 @@ class Model:
                     if int(target) < n:
                         raise ModelError(f"pad_to for beam {name!r} must be >= its {n} elements, got {target}")
                     mesh = pad(mesh, int(target))
+            on_beam = [(s, m) for _, b, s, m in self._attached if b == name]
+            attached = (AttachedMasses(jnp.asarray([s for s, _ in on_beam], float),
+                                       jnp.asarray([m for _, m in on_beam], float)) if on_beam else None)
             beams.append(Beam(mesh, spec.section, alpha=spec.alpha, beta=spec.beta,
-                              formulation=spec.formulation))
+                              formulation=spec.formulation, attached=attached))
             ref = np.asarray(mesh.reference_nodes)
             x0 = ref.copy()
             if spec.initial_nodes is not None:

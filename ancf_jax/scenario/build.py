@@ -123,6 +123,8 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
             m.add_beam(name, mesh, section, alpha=b.alpha, beta=b.beta, formulation=formulation,
                        initial_nodes=nodes, initial_velocities=vel)
             shapes[name] = (Beam(mesh, section), np.asarray(mesh.reference_nodes) if nodes is None else nodes)
+            for i, pm in enumerate(b.masses):
+                m.attached_mass(f"{name}.masses[{i}]", name, on_beam(pm.s, lengths[name]), pm.mass)
 
     poses: dict[str, tuple[float, float, float]] = {}
     for name, b in spec.bodies.items():

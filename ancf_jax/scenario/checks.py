@@ -171,6 +171,8 @@ class Checker:
                                   "an angle different from start_angle [rad]")
             self.elements[name] = element_count(b)
             self.lengths[name] = reference_length(g, self.elements[name])
+            for i, pm in enumerate(b.masses):
+                self.arc_length(path + ("masses", i, "s"), name, pm.s)
             self.section(path + ("section",), b.section)
             if b.formulation.curvature == "small_strain" and not isinstance(g, S.Straight):
                 raise Invalid(path + ("formulation", "curvature"),

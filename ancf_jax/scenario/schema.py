@@ -143,6 +143,14 @@ class BeamInitial(Table):
                                        doc="initial nodal velocities, (n+1) rows (instead of velocity)")
 
 
+class AttachedMassSpec(Table):
+    """A point mass fixed to a material point of the beam (a clamp or spacer on a wire),
+    translation only: consistent added mass m Sᵀ S and its weight."""
+
+    s: float = key(unit="m", ge=0.0, allow_inf_nan=False, doc="reference arc length (0..L)")
+    mass: float = key(unit="kg", gt=0.0, allow_inf_nan=False, doc="m")
+
+
 class BeamSpec(Table):
     """An ANCF beam or cable (paper Eqs. 1–11)."""
 
@@ -156,6 +164,8 @@ class BeamSpec(Table):
                       doc="Rayleigh stiffness-proportional damping β (Eq. 11)")
     formulation: FormulationSpec = key(FormulationSpec(), doc="strain measures and quadrature")
     initial: BeamInitial = key(BeamInitial(), doc="initial shape and velocity")
+    masses: list[AttachedMassSpec] = key([], doc="point masses fixed to the beam (clamps), "
+                                                 "as [[beams.NAME.masses]] tables")
 
 
 # ----------------------------------------------------------------------------- bodies
