@@ -96,6 +96,14 @@ class AbstractLoad(AbstractForce):
         return jnp.zeros_like(q)
 
 
+def _selection(idx, size, dtype):
+    """(k, size) one-hot rows selecting the indices idx, repeated indices counted once."""
+    k = idx.shape[0]
+    earlier = jnp.arange(k)[:, None] > jnp.arange(k)[None, :]
+    first = ~jnp.any((idx[:, None] == idx[None, :]) & earlier, axis=1)
+    return jax.nn.one_hot(idx, size, dtype=dtype) * first[:, None]
+
+
 def force_tangent(force: AbstractForce, system, q, v, t, damping_coef, load_factor=1.0):
     """Linearization of one force element for a Newton matrix.
 
@@ -112,16 +120,58 @@ def force_tangent(force: AbstractForce, system, q, v, t, damping_coef, load_fact
     n = q.shape[0]
     idx = force.coordinates(system, q)
     idx = jnp.arange(n) if idx is None else jnp.asarray(idx)
+    p = _selection(idx, n, q.dtype)
     k = idx.shape[0]
-    earlier = jnp.arange(k)[:, None] > jnp.arange(k)[None, :]
-    first = ~jnp.any((idx[:, None] == idx[None, :]) & earlier, axis=1)
-    p = jax.nn.one_hot(idx, n, dtype=q.dtype) * first[:, None]
 
     def local(d):
         dq = p.T @ d
         return p @ force.generalized_force(system, q + dq, v + damping_coef * dq, t, load_factor)
 
     return p, -jax.jacfwd(local)(jnp.zeros(k, q.dtype))
+
+
+class AbstractReactionForce(eqx.Module):
+    """A dissipative force that depends on joint reactions: Q(q, v, t, λ), e.g. Coulomb
+    friction proportional to a normal reaction (:class:`ancf_jax.sliding.SlidingFriction`).
+
+    It enters the implicit residual M q̈ − Q − Q_r(q, v, t, λ) + Φ_qᵀ λ with its exact
+    linearization in q, v and λ (:func:`reaction_force_tangent`, a non-symmetric
+    low-rank term of the Newton matrix), the index-1 accelerations by a fixed-point
+    iteration on λ (:func:`ancf_jax.dae.accelerations`), and the energy balance as
+    dissipation −v·Q_r. Statics leaves it out (it vanishes at rest for the laws here).
+    """
+
+    name: str = eqx.field(static=True)
+
+    @abc.abstractmethod
+    def generalized_force(self, system, q, v, t, lam):
+        """Q_r(q, v, t, λ), shape (n,); its power v·Q_r must be ≤ 0."""
+
+    @abc.abstractmethod
+    def coordinates(self, system, q):
+        """Indices of q the force depends on and acts on, int array of fixed length."""
+
+    @abc.abstractmethod
+    def multiplier_indices(self, system):
+        """Indices of λ the force depends on, int array of fixed length."""
+
+
+def reaction_force_tangent(force: AbstractReactionForce, system, q, v, lam, t, damping_coef):
+    """Linearization of a reaction-dependent force for a Newton matrix in the unknowns
+    (q, λ): with P (k, n + m) the selection of its coordinates and multipliers,
+    returns ``(P, A)``, A = −P ∂[Q_r; 0]/∂(q, λ) Pᵀ with ∂/∂q including c_v ∂/∂v
+    (c_v = ``damping_coef``), so that its contribution is Pᵀ A P (non-symmetric)."""
+    n, m = q.shape[0], lam.shape[0]
+    idx = jnp.concatenate([jnp.asarray(force.coordinates(system, q)),
+                           n + jnp.asarray(force.multiplier_indices(system))])
+    p = _selection(idx, n + m, q.dtype)
+
+    def local(d):
+        dx = p.T @ d
+        dq, dl = dx[:n], dx[n:]
+        return p[:, :n] @ force.generalized_force(system, q + dq, v + damping_coef * dq, t, lam + dl)
+
+    return p, -jax.jacfwd(local)(jnp.zeros(idx.shape[0], q.dtype))
 
 
 class PointForce(AbstractLoad):

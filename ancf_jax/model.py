@@ -41,6 +41,7 @@ from .forces import (CompressionOnlySpringDamper, PointForce, PointTorque, Sprin
 from .mesh import BeamMesh, pad
 from .newton import ModifiedNewton
 from .section import Section
+from .sliding import DEFAULT_REGULARIZATION, SlidingDriveForce, SlidingFriction, SlidingServo
 from .system import State, System
 from .validation import (check_choice, check_finite, check_nonnegative, check_positive,
                          check_vector)
@@ -109,6 +110,8 @@ class Model:
         self._joints: list[tuple[str, str, dict]] = []
         self._forces: list[tuple[str, str, dict]] = []
         self._attached: list[tuple[str, str, float, float]] = []
+        self._friction: list[tuple[str, str, dict]] = []
+        self._drives: list[tuple[str, str, str, dict]] = []
         self._names: set[str] = set()
 
     # ------------------------------------------------------------------ entities
@@ -258,6 +261,63 @@ class Model:
         self._sliders[name] = dict(body=body, beam=beam, s=s0, local=lp, hold=bool(hold), rate=rate)
         return name
 
+    def slider_friction(self, name: str, slider: str, *, mu, regularization=DEFAULT_REGULARIZATION,
+                        viscous=0.0) -> str:
+        """Coulomb friction on sliding joint ``slider``: −μ N tanh(u / v_ε) − c u [N] on
+        the body along the beam, N the joint's normal reaction, u the sliding speed
+        (:class:`~ancf_jax.sliding.SlidingFriction`).
+
+        Args:
+            mu: friction coefficient μ >= 0.
+            regularization: v_ε [m/s] > 0 (default 1e-3): a body held by friction
+                creeps at v_ε artanh(F / (μN)) under a tangential load F < μN.
+            viscous: c [N·s/m] >= 0.
+        """
+        mu = check_nonnegative(f"mu of friction {name!r}", mu)
+        ve = check_positive(f"regularization of friction {name!r}", regularization, "m/s")
+        c = check_nonnegative(f"viscous of friction {name!r}", viscous, "N*s/m")
+        self._claim(name, "force")
+        self._friction.append((name, slider, dict(mu=mu, regularization=ve, viscous=c)))
+        return name
+
+    def slider_drive(self, name: str, slider: str, *, position: Callable | None = None,
+                     force=None, time_function: Callable | None = None, speed=None, gain=None,
+                     max_force=None) -> str:
+        """Drive sliding joint ``slider`` (give exactly one of ``position``, ``force``,
+        ``speed``; :mod:`ancf_jax.sliding`):
+
+        * ``position``: the arc length follows s(t) = ``position(t)`` [m] (a joint named
+          ``name``; the drive force is its reaction, the work the constraint work);
+        * ``force``: a tangential force F [N] on the body along +s (reaction on the
+          beam), scaled by ``time_function(t)`` if given;
+        * ``speed``: a velocity servo F = F_max tanh(k (u* − u)/F_max) to the sliding
+          speed u* [m/s] (a number or a function of t), with ``gain`` k [N·s/m] > 0 and
+          ``max_force`` F_max [N] > 0.
+        """
+        given = [k for k, x in (("position", position), ("force", force), ("speed", speed)) if x is not None]
+        if len(given) != 1:
+            raise ModelError(f"drive {name!r} needs exactly one of position, force, speed, got "
+                             f"{', '.join(given) or 'none'}")
+        kind = given[0]
+        if kind == "position":
+            if not callable(position):
+                raise ModelError(f"position of drive {name!r} must be a callable s(t) [m]")
+            a = dict(function=position)
+        elif kind == "force":
+            f = float(check_finite(f"force of drive {name!r}", force))
+            if time_function is not None and not callable(time_function):
+                raise ModelError(f"time_function of drive {name!r} must be callable")
+            a = dict(force=f, time_function=time_function)
+        else:
+            if not callable(speed):
+                u = float(check_finite(f"speed of drive {name!r}", speed))
+                speed = lambda t, u=u: jnp.asarray(u, float) + 0.0 * t  # noqa: E731
+            a = dict(speed=speed, gain=check_positive(f"gain of drive {name!r}", gain, "N*s/m"),
+                     max_force=check_positive(f"max_force of drive {name!r}", max_force, "N"))
+        self._claim(name, "joint" if kind == "position" else "force")
+        self._drives.append((kind, name, slider, a))
+        return name
+
     def prescribe_point(self, name: str, point: PointRef, function: Callable) -> str:
         """The point follows ``function(t) -> (x, y)`` [m] (JAX-traceable)."""
         if not callable(function):
@@ -398,6 +458,14 @@ class Model:
             body(a["body"], what)
             beam(a["beam"], what)
             arc_ok(a["beam"], a["s"], what, "initial arc length s =")
+        for name, slider, _ in self._friction:
+            if slider not in self._sliders:
+                raise ModelError(f"friction {name!r} refers to sliding joint {slider!r}, which does not exist "
+                                 f"(sliding joints: {', '.join(map(repr, self._sliders)) or 'none'})")
+        for _, name, slider, _ in self._drives:
+            if slider not in self._sliders:
+                raise ModelError(f"drive {name!r} refers to sliding joint {slider!r}, which does not exist "
+                                 f"(sliding joints: {', '.join(map(repr, self._sliders)) or 'none'})")
         for name, b, s, _ in self._attached:
             what = f"attached mass {name!r}"
             beam(b, what)
@@ -545,6 +613,15 @@ class Model:
             constraints.append(J.SlidingJoint(name, b, j, P.BodyPoint(k, jnp.asarray(a["local"], float))))
             if (a["hold"] if hold is None else hold):
                 constraints.append(J.SlidingHold(f"{name}.hold", j, jnp.asarray(a["s"], float)))
+        for kind, name, slider, a in self._drives:
+            if kind == "position":
+                constraints.append(J.PrescribedCoordinate(
+                    name, skeleton.sliding_offset + slider_names.index(slider), a["function"]))
+        joint_index = {c.name: k for k, c in enumerate(constraints)}
+        reaction_forces = tuple(
+            SlidingFriction(name, joint_index[slider], jnp.asarray(a["mu"], float),
+                            jnp.asarray(a["regularization"], float), jnp.asarray(a["viscous"], float))
+            for name, slider, a in self._friction)
 
         # ---- forces
         forces = []
@@ -566,10 +643,19 @@ class Model:
                 forces.append(law(name, pa, pb, jnp.asarray(a["stiffness"], float),
                                   jnp.asarray(a["damping"], float), jnp.asarray(l0, float)))
 
+        for kind, name, slider, a in self._drives:
+            j = slider_names.index(slider)
+            b = beam_of(self._sliders[slider]["beam"])
+            if kind == "force":
+                forces.append(SlidingDriveForce(name, b, j, jnp.asarray(a["force"], float), a["time_function"]))
+            elif kind == "speed":
+                forces.append(SlidingServo(name, b, j, a["speed"], jnp.asarray(a["gain"], float),
+                                           jnp.asarray(a["max_force"], float)))
+
         system = System(bodies, tuple(beams), tuple(constraints), tuple(forces),
                         jnp.asarray(self.gravity, float), n_sliding=len(slider_names),
                         body_names=tuple(body_names), beam_names=tuple(beam_names),
-                        sliding_names=tuple(slider_names))
+                        sliding_names=tuple(slider_names), reaction_forces=reaction_forces)
         v0 = np.asarray(system.pack(body_vel, vel0, s_rate))
         state = State(jnp.asarray(q0), jnp.asarray(v0), jnp.zeros(()))
         if assemble:

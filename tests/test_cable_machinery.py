@@ -8,6 +8,7 @@ phases with its tolerance from a step-halving study, ...
 """
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -20,10 +21,12 @@ from ancf_jax.forces import CompressionOnlySpringDamper, TensionOnlySpringDamper
 from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
 from ancf_jax.modal import modal_analysis
 from ancf_jax.model import Model, body_point, ground, node
+from ancf_jax.outputs import Output, evaluate
 from ancf_jax.points import BodyPoint, GroundPoint
+from ancf_jax.results import Results
 from ancf_jax.section import Section
 
-from .dynamics import G, run_fixed
+from .dynamics import G, run_fixed, track_model
 
 # ---------------------------------------------------------------------------- ropes
 K_ROPE, M_ROPE, L_ROPE, V_UP, T_ROPE = 400.0, 1.0, 1.0, 2.0, 1.6
@@ -47,7 +50,7 @@ def rope_runs():
     for c in (0.0, 2.0):
         system, state = rope_model(c)
         for h in (0.002, 0.001, 0.0005):
-            out[c, h] = system, run_fixed(system, state, GeneralizedAlpha(), h, T_ROPE, chunk=200)
+            out[c, h] = system, run_fixed(system, state, GeneralizedAlpha().forward_only(), h, T_ROPE, chunk=200)
     return out
 
 
@@ -207,3 +210,135 @@ def test_taut_string_with_central_mass_frequency():
     assert rel[16] / rel[32] == pytest.approx(2.0, abs=0.05)
     assert abs((2.0 * errors[32] - errors[16]) / omega - 1.0) < 2e-5
     assert 0.0 < rel[9] < 5e-3
+
+
+# ---------------------------------------------------------------------------- friction, drives
+MU = 0.3
+V_EPS = 1e-3  # the default regularization speed
+S_START = 0.5
+
+
+def incline_model(tan_beta, *, s0=S_START):
+    """A body (1 kg) on a straight rigid incline (4 elements, every node clamped) of
+    slope angle β, friction μ on its sliding joint "slider" (default v_ε)."""
+    beta = np.arctan(tan_beta)
+    track = mesh.straight((0.0, 0.0), (np.cos(beta), -np.sin(beta)), 2.0, 4)  # +s: downhill
+    m = track_model(track, s0)
+    m.slider_friction("friction", "slider", mu=MU)
+    return m, beta
+
+
+def total_energy(system, run):
+    """T + V + U + D − W_e − W_c per row [J] (Results.energy's total)."""
+    @eqx.filter_jit
+    def mech(system, q, v):
+        return jax.vmap(lambda qq, vv: system.kinetic_energy(vv) + system.potential_energy(qq))(q, v)
+    return np.asarray(mech(system, run.q, run.v)) + run.work[:, 0] - run.work[:, 1] - run.work[:, 2]
+
+
+@pytest.fixture(scope="module")
+def incline_runs():
+    """tan β = 0.5 μ (sticks) and 2 μ (slides) at h = 1 ms over 0.4 s (one program)."""
+    out = {}
+    for ratio in (0.5, 2.0):
+        m, beta = incline_model(ratio * MU)
+        system, state = m.build()
+        out[ratio] = system, beta, run_fixed(system, state, GeneralizedAlpha().forward_only(), 0.001, 0.4, chunk=100)
+    return out
+
+
+def test_friction_sticks_below_the_limit(incline_runs):
+    """tan β = μ/2: the regularized friction holds the body, which creeps at the
+    stated speed v_ε artanh(tan β / μ) = 0.549 v_ε (steady state of F = μN tanh(u/v_ε);
+    measured to 1e-10 relative after 0.1 s), far below any visible motion; the friction force is the
+    slope component m g sin β, the normal reaction m g cos β."""
+    system, beta, run = incline_runs[0.5]
+    assert run.status == 0
+    u = run.v[:, system.sliding_offset]
+    creep = V_EPS * np.arctanh(np.tan(beta) / MU)
+    late = run.t > 0.1
+    np.testing.assert_allclose(u[late], creep, rtol=1e-8)
+    # the first steps overshoot (h = 1 ms is 3 relaxation times v_ε/(μ g cos β) of the
+    # regularized law; generalized-α, ρ∞ = 0.9, rings it down): measured 1.16× at 1 ms
+    assert np.max(u) < 1.2 * creep
+    lam = run.lam[:, system.constraint_offset(len(system.constraints) - 1):][:, :2]
+    t_hat = np.array([np.cos(beta), -np.sin(beta)])
+    n_hat = np.array([np.sin(beta), np.cos(beta)])
+    np.testing.assert_allclose((lam @ t_hat)[late], -G * np.sin(beta), rtol=1e-8)  # friction up the slope
+    np.testing.assert_allclose((lam @ n_hat)[late], G * np.cos(beta), rtol=1e-8)
+
+
+def test_friction_slides_above_the_limit(incline_runs):
+    """tan β = 2μ: the body accelerates at g (sin β − μ cos β) (from ṡ between 0.2 and
+    0.4 s; measured 5e-13 relative); the energy balance with the friction dissipation
+    closes to 3e-6 J (0.51 J dissipated; measured 2.4e-6 J at h = 1 ms, 9.7e-6 J at
+    2 ms: second order)."""
+    system, beta, run = incline_runs[2.0]
+    u = run.v[:, system.sliding_offset]
+    i, j = np.searchsorted(run.t, 0.2), len(run.t) - 1
+    a = (u[j] - u[i]) / (run.t[j] - run.t[i])
+    assert a == pytest.approx(G * (np.sin(beta) - MU * np.cos(beta)), rel=1e-9)
+    total = total_energy(system, run)
+    assert np.max(np.abs(total - total[0])) < 3e-6
+    assert run.work[-1, 0] == pytest.approx(0.5108, abs=2e-3)
+
+
+U_DRIVE, F_PULL, T_DRIVE = 0.5, 10.0, 0.3
+SERVO_GAIN, SERVO_MAX = 2000.0, 50.0
+
+
+@pytest.fixture(scope="module")
+def driven_run():
+    """Three trolleys (1 kg) with friction μ on one rigid incline, tan β = 0.15, hauled
+    uphill: "a" by a prescribed arc length s = 1.5 − U t, "b" by a velocity servo to
+    −U (gain 2000 N·s/m, limit 50 N) from ṡ = −U, "c" by a constant pull of 10 N from
+    rest. One run, h = 1 ms, 0.3 s."""
+    beta = np.arctan(0.15)
+    track = mesh.straight((0.0, 0.0), (np.cos(beta), -np.sin(beta)), 2.0, 2)
+    m = Model(gravity=(0.0, -G))
+    m.add_beam("track", track, Section(2.1e11, 1e-4, 1e-9, 0.785))
+    for i in range(3):
+        m.clamp(f"clamp{i}", "track", i)
+    t_hat = np.array([np.cos(beta), -np.sin(beta)])
+    for name, s0, rate in (("a", 1.5, -U_DRIVE), ("b", 1.0, -U_DRIVE), ("c", 0.5, 0.0)):
+        m.add_body(name, mass=1.0, inertia=0.1, position=s0 * t_hat, velocity=rate * t_hat)
+        m.slider(f"s{name}", name, "track", s0, rate=rate)
+        m.slider_friction(f"friction_{name}", f"s{name}", mu=MU)
+    m.slider_drive("drive_a", "sa", position=lambda t: 1.5 - U_DRIVE * t)
+    m.slider_drive("drive_b", "sb", speed=-U_DRIVE, gain=SERVO_GAIN, max_force=SERVO_MAX)
+    m.slider_drive("drive_c", "sc", force=-F_PULL)
+    system, state = m.build()
+    run = run_fixed(system, state, GeneralizedAlpha().forward_only(), 0.001, T_DRIVE, chunk=100)
+    results = Results(system, run.t, run.q, run.v, run.acc, run.lam, run.work, np.zeros(len(run.t)))
+    return system, beta, run, results
+
+
+def test_driven_trolleys_closed_form_resistance(driven_run):
+    """At constant speed uphill the drive force equals the closed-form resistance
+    −m g (sin β + μ cos β) (tanh(U/v_ε) = 1 to 1e-200): prescribed s(t) (its reaction)
+    to 1e-9 relative; the servo's to 1e-9 relative at the speed error
+    (F_max/k) artanh(F/F_max) it needs; the pulled trolley accelerates at
+    −F/m + g (sin β + μ cos β). The friction output is μ m g cos β, the energy balance
+    (drive work as constraint and external work, friction dissipation) closes to
+    4e-6 of the work done (the pulled trolley's start from rest is the transient)."""
+    system, beta, run, results = driven_run
+    resistance = G * (np.sin(beta) + MU * np.cos(beta))
+    late = run.t > 0.1
+    cols = evaluate(results, [Output("fa", "drive", "drive_a"), Output("fb", "drive", "drive_b"),
+                              Output("fc", "drive", "drive_c"), Output("na", "friction", "friction_a", "normal"),
+                              Output("ra", "friction", "friction_a", "force")])
+    np.testing.assert_allclose(cols["fa"][late], -resistance, rtol=1e-8)  # measured 2.6e-9 (Newton tolerance)
+    np.testing.assert_allclose(cols["fb"][late], -resistance, rtol=1e-9)  # measured 2.8e-10
+    np.testing.assert_allclose(cols["fc"], -F_PULL, rtol=1e-14)
+    np.testing.assert_allclose(cols["na"], G * np.cos(beta), rtol=1e-9)
+    np.testing.assert_allclose(cols["ra"][late], MU * G * np.cos(beta), rtol=1e-9)
+    o = system.sliding_offset
+    np.testing.assert_allclose(run.q[:, o], 1.5 - U_DRIVE * run.t, atol=1e-12)
+    error = SERVO_MAX / SERVO_GAIN * np.arctanh(resistance / SERVO_MAX)
+    np.testing.assert_allclose(run.v[late, o + 1], -U_DRIVE + error, rtol=1e-9)
+    u_c = run.v[:, o + 2]
+    i, j = np.searchsorted(run.t, 0.1), len(run.t) - 1
+    assert (u_c[j] - u_c[i]) / (run.t[j] - run.t[i]) == pytest.approx(-F_PULL + resistance, rel=1e-9)
+    total = total_energy(system, run)
+    assert np.max(np.abs(total - total[0])) < 3e-5  # measured 1.3e-5 J of 3.2 J + 0.65 J work
+    assert run.work[-1, 1] > 0.0 and run.work[-1, 2] > 0.0  # servo, pull; hauling a
