@@ -611,7 +611,8 @@ class Model:
             k = body_of(a["body"], what)
             b = beam_of(a["beam"], what)
             constraints.append(J.SlidingJoint(name, b, j, P.BodyPoint(k, jnp.asarray(a["local"], float))))
-            if (a["hold"] if hold is None else hold):
+            driven = any(kind == "position" and sl == name for kind, _, sl, _ in self._drives)
+            if (a["hold"] if hold is None else hold) and not driven:  # a position drive holds it
                 constraints.append(J.SlidingHold(f"{name}.hold", j, jnp.asarray(a["s"], float)))
         for kind, name, slider, a in self._drives:
             if kind == "position":

@@ -150,6 +150,15 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
             elif j.type == "sliding":
                 m.slider(name, j.body, j.beam, on_beam(j.s, lengths[j.beam]), local=j.local, hold=j.hold,
                          rate=j.rate)
+                if j.friction is not None:
+                    f = j.friction
+                    m.slider_friction(f"{name}.friction", name, mu=f.mu, regularization=f.regularization,
+                                      viscous=f.viscous)
+                if j.drive is not None:
+                    d = j.drive
+                    m.slider_drive(f"{name}.drive", name, position=d.position, force=d.force,
+                                   time_function=d.time_function, speed=d.speed, gain=d.gain,
+                                   max_force=d.max_force)
             elif j.type == "prescribed_point":
                 m.prescribe_point(name, point_ref(spec, lengths, j.point), PointPath(j.x, j.y))
             else:
@@ -221,6 +230,8 @@ def make_outputs(spec: S.ScenarioSpec) -> list[Output]:
         elif o.type == "reaction":
             out.append(Output(name, "reaction", o.joint,
                               o.component if o.component is not None else str(o.index)))
+        elif o.type in ("friction", "drive"):
+            out.append(Output(name, o.type, f"{o.joint}.{o.type}", o.component))
         elif o.type == "member":
             out.append(Output(name, "member", o.load, o.component))
         else:
