@@ -409,3 +409,36 @@ def test_gradients_through_friction_and_drive():
     # the closed form of the saturated motion, ½ T² (−N, 1/m), up to the transient
     assert grad[0] == pytest.approx(-0.5 * 0.05**2 * G * np.cos(beta), rel=0.05)
     assert grad[1] == pytest.approx(0.5 * 0.05**2, rel=0.05)
+
+
+def test_bad_machinery_input_is_refused_before_compiling():
+    """One-line errors naming the parameter, raised by the Model before any JAX work."""
+    from ancf_jax.errors import ModelError
+
+    def base():
+        m = Model()
+        m.add_beam("w", mesh.straight((0.0, 0.0), (1.0, 0.0), 1.0, 2), Section(1e9, 1e-4, 1e-9, 0.1))
+        m.add_body("b", mass=1.0, inertia=0.1, position=(0.5, 0.0))
+        m.slider("sl", "b", "w", 0.5)
+        return m
+
+    cases = [
+        (lambda m: m.slider_drive("d", "sl"), "exactly one of position, force, speed, got none"),
+        (lambda m: m.slider_drive("d", "sl", force=1.0, speed=1.0), "exactly one of position, force, speed"),
+        (lambda m: m.slider_drive("d", "sl", speed=1.0, max_force=1.0), "gain of drive 'd'"),
+        (lambda m: m.slider_drive("d", "sl", speed=1.0, gain=1.0, max_force=-1.0), "max_force of drive 'd'"),
+        (lambda m: m.slider_friction("f", "sl", mu=-0.1), "mu of friction 'f'"),
+        (lambda m: m.slider_friction("f", "sl", mu=0.1, regularization=0.0), "regularization of friction 'f'"),
+        (lambda m: m.spring_damper("r", ground(0.0, 0.0), body_point("b"), stiffness=1.0, acts="pull"),
+         "acts of spring-damper 'r'"),
+        (lambda m: m.attached_mass("c", "w", 0.5, 0.0), "mass of attached mass 'c'"),
+    ]
+    for add, fragment in cases:
+        with pytest.raises(ModelError, match=fragment):
+            add(base())
+    for add, fragment in [(lambda m: m.slider_friction("f", "nope", mu=0.1), "sliding joint 'nope'"),
+                          (lambda m: m.attached_mass("c", "w", 1.5, 0.1), "outside beam 'w'")]:
+        m = base()
+        add(m)
+        with pytest.raises(ModelError, match=fragment):
+            m.build()
