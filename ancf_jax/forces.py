@@ -13,6 +13,10 @@ the two partial bases that fix the parts it does not have:
 :class:`AbstractConservativeForce` (a potential only: springs, user energies) and
 :class:`AbstractLoad` (a prescribed load only).
 
+Forces that depend on the joint reactions λ (friction proportional to a normal force)
+are :class:`AbstractReactionForce` elements, held apart in ``System.reaction_forces``.
+One-sided members (ropes, stops) are :class:`AbstractOneSidedSpringDamper`.
+
 Point forces map to generalized forces through the point's Jacobian by one
 vector-Jacobian product, Q = J_pᵀ F, never a hand-written Jacobian.
 

@@ -2,9 +2,17 @@
 point masses on beams, driven and frictional sliding joints.
 
 Closed forms and independent numbers: a body bouncing on a tension-only rope (free
-flight while slack, harmonic while taut; scipy's solve_ivp with events as the
-independent answer for the damped rope), the energy balance through slack and taut
-phases with its tolerance from a step-halving study, ...
+flight while slack, harmonic while taut; scipy's solve_ivp as the independent answer),
+the energy balance through slack and taut phases with its tolerance from a step-halving
+study; a clamp mass's kinetic energy, weight and the frequency of a taut string with a
+central mass (z tan z = ρL/M, with a convergence study); a body on a frictional incline
+that creeps at v_ε artanh(F/μN) or slides at g (sin β − μ cos β); trolleys hauled at
+constant speed by a prescribed arc length, a servo and a pull against the closed-form
+resistance; the Newton matrix with ∂Q/∂λ against a dense jacfwd; gradients through
+friction and a drive against finite differences.
+
+Compiled programs are shared: the rope runs (h is data), the incline runs (tan β is
+data), one three-trolley run, one gradient program.
 """
 
 import equinox as eqx
