@@ -41,7 +41,7 @@ from .forces import (CompressionOnlySpringDamper, PointForce, PointTorque, Sprin
 from .mesh import BeamMesh, pad
 from .newton import ModifiedNewton
 from .section import Section
-from .sliding import DEFAULT_REGULARIZATION, SlidingDriveForce, SlidingFriction, SlidingServo
+from .sliding import DEFAULT_REGULARIZATION, ConstantSpeed, SlidingDriveForce, SlidingFriction, SlidingServo
 from .system import State, System
 from .validation import (check_choice, check_finite, check_nonnegative, check_positive,
                          check_vector)
@@ -311,7 +311,7 @@ class Model:
         else:
             if not callable(speed):
                 u = float(check_finite(f"speed of drive {name!r}", speed))
-                speed = lambda t, u=u: jnp.asarray(u, float) + 0.0 * t  # noqa: E731
+                speed = ConstantSpeed(u)
             a = dict(speed=speed, gain=check_positive(f"gain of drive {name!r}", gain, "N*s/m"),
                      max_force=check_positive(f"max_force of drive {name!r}", max_force, "N"))
         self._claim(name, "joint" if kind == "position" else "force")
