@@ -19,7 +19,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .element import mass as element_mass
-from .element.shape_functions import position as _position, slope as _slope
+from .element.shape_functions import position as _position, shape_matrix, slope as _slope
 from .element import laws as _laws
 from .element.strain_energy import Formulation, axial_strain as _axial_strain, dissipative_force as _dissipative, strain_energy
 from .element.stress import axial_force as _axial_force, bending_stress
@@ -28,6 +28,33 @@ from .linalg import BlockTridiagonal
 from .mesh import BeamMesh
 from .section import Section
 from .validation import check_nonnegative
+
+
+class AttachedMasses(eqx.Module):
+    """Point masses fixed to material points of a beam (clamps, spacers, markers on a
+    wire), translation only: mass m_i at reference arc length s_i.
+
+    Each adds the consistent mass m_i S(x_i)ᵀ S(x_i) (S the 2×8 shape matrix of Eq. 2 in
+    the element holding s_i, x_i the local arc length) to that element's mass matrix,
+    so the kinetic energy gains ½ m_i |ṙ(s_i)|², and its weight m_i S(x_i)ᵀ g to the
+    consistent gravity load. Both are constant: the beam mass stays constant and
+    block tridiagonal. No rotary inertia.
+
+    Attributes:
+        s: reference arc lengths s_i [m], shape (k,).
+        mass: masses m_i [kg], shape (k,).
+    """
+
+    s: jnp.ndarray
+    mass: jnp.ndarray
+
+    def element_terms(self, mesh: BeamMesh, gravity):
+        """(element index (k,), mass terms m Sᵀ S (k, 8, 8), gravity loads m Sᵀ g (k, 8))."""
+        def one(si, mi):
+            e, x = mesh.locate(si)
+            sm = shape_matrix(x, mesh.element_lengths[e])
+            return e, mi * sm.T @ sm, mi * sm.T @ gravity
+        return jax.vmap(one)(self.s, self.mass)
 
 
 def _maybe_nonzero(x) -> bool:
@@ -52,6 +79,7 @@ class Beam(eqx.Module):
         axial_law, bending_law: material laws N(ε, ε̇) and M(κ, κ̇)
             (:mod:`ancf_jax.element.laws`); None (default): linear elastic with the
             section's EA and EI, through the unchanged energy of Eq. 8.
+        attached: point masses fixed to the beam (:class:`AttachedMasses`), or None.
     """
 
     mesh: BeamMesh
@@ -62,10 +90,13 @@ class Beam(eqx.Module):
     rate_stiffness: bool = eqx.field(static=True)
     axial_law: _laws.AbstractLaw | None = None
     bending_law: _laws.AbstractLaw | None = None
+    attached: AttachedMasses | None = None
 
     def __init__(self, mesh: BeamMesh, section: Section, *, alpha=0.0, beta=0.0,
                  formulation: Formulation | None = None, rate_stiffness: bool | None = None,
-                 axial_law: _laws.AbstractLaw | None = None, bending_law: _laws.AbstractLaw | None = None):
+                 axial_law: _laws.AbstractLaw | None = None, bending_law: _laws.AbstractLaw | None = None,
+                 attached: AttachedMasses | None = None):
+        self.attached = attached
         self.mesh = mesh
         self.section = section
         self.alpha = jnp.asarray(check_nonnegative("alpha (Rayleigh, mass-proportional)", alpha, "1/s"), float)
@@ -237,7 +268,11 @@ class Beam(eqx.Module):
         """Element mass matrices (Eq. 6), shape (n_max, 8, 8), zero when inactive."""
         m = jax.vmap(lambda l: element_mass.mass_matrix(l, self.section.mass_per_length))(
             self.mesh.element_lengths)
-        return jnp.where(self.mesh.active[:, None, None], m, 0.0)
+        m = jnp.where(self.mesh.active[:, None, None], m, 0.0)
+        if self.attached is not None:
+            k, mm, _ = self.attached.element_terms(self.mesh, jnp.zeros(2))
+            m = m.at[k].add(mm)
+        return m
 
     def mass(self) -> BlockTridiagonal:
         """Assembled consistent mass matrix with a unit dummy mass on inactive nodes."""
@@ -250,13 +285,17 @@ class Beam(eqx.Module):
         f = jax.vmap(lambda l: element_mass.gravity_load(l, self.section.mass_per_length, gravity))(
             self.mesh.element_lengths)
         f = jnp.where(self.mesh.active[:, None], f, 0.0)
+        if self.attached is not None:
+            k, _, fg = self.attached.element_terms(self.mesh, jnp.asarray(gravity, float))
+            f = f.at[k].add(fg)
         out = jnp.zeros((self.n_nodes, 4))
         return out.at[:-1].add(f[:, :4]).at[1:].add(f[:, 4:])
 
     @property
     def total_mass(self):
-        """ρA · L of the active elements [kg]."""
-        return self.section.mass_per_length * self.mesh.length
+        """ρA · L of the active elements plus the attached masses [kg]."""
+        m = self.section.mass_per_length * self.mesh.length
+        return m if self.attached is None else m + jnp.sum(self.attached.mass)
 
     # ------------------------------------------------------------------ kinematics
     def element_at(self, nodes, s):

@@ -107,7 +107,8 @@ def build_parser() -> argparse.ArgumentParser:
                      description="Differentiable planar ANCF beams and cables with rigid multibody "
                                  "systems (Seo, Jung & Park), on JAX. MODEL is a shipped scenario "
                                  "(m1, m2, flexible_pendulum, cantilever_tip_load, hanging_chain, "
-                                 "cable_car) or a scenario file (.toml or .json). Exit status: 0 done, 1 failed "
+                                 "cable_car, hauled_cabin) or a scenario file (.toml or .json). "
+                                 "Exit status: 0 done, 1 failed "
                                  "run (results up to then written), 2 bad input (one line), 130 "
                                  "interrupted (results up to then written).")
     parser.add_argument("--version", action="version", version=f"ancf-jax {__version__}")

@@ -28,7 +28,7 @@ import numpy as np
 
 from .linalg import (AbstractSaddleSolver, AutoSaddleSolver, BlockTridiagonal, SaddleFactor, SaddleMatrix,
                      factor_chain, solve_symmetric_implicit)
-from .forces import force_tangent
+from .forces import force_tangent, reaction_force_tangent
 from .newton import ModifiedNewton
 from .system import System
 
@@ -100,9 +100,16 @@ def powers(system: System, q, v, t, lam):
     T + V + U + D − W_e − W_c stays constant (D, W_e, W_c the time integrals).
     """
     p_d = -jnp.dot(v, system.damping_force(q, v))
+    if system.reaction_forces:
+        p_d = p_d - jnp.dot(v, system.reaction_force(q, v, t, lam))
     p_e = jnp.dot(v, system.applied_force(q, v, t))
     p_c = jnp.dot(lam, system.constraint_time_derivative(q, t)) if system.n_constraints else jnp.zeros(())
     return jnp.stack([p_d, p_e, p_c])
+
+
+#: fixed-point iterations on λ of the index-1 accelerations of systems with
+#: reaction-dependent forces (friction): the error falls by about μ each
+REACTION_ITERATIONS = 12
 
 
 def accelerations(system: System, q, v, t, *, baumgarte: float = 0.0, chain_factor=None,
@@ -126,6 +133,14 @@ def accelerations(system: System, q, v, t, *, baumgarte: float = 0.0, chain_fact
         gamma = gamma - 2.0 * w * system.constraint_velocity(q, v, t) - w * w * system.constraint(q, t)
     f = mass_saddle_factor(system, jac, chain_factor, linear_solver=linear_solver)
     x = linear_solver.compute(f, to_solver_order(system, rhs_q, gamma))
+    if system.reaction_forces:
+        # friction depends on λ: fixed-point iteration λ ↦ Q_r(λ) ↦ solve, with the same
+        # factors (contracts by about μ per iteration; REACTION_ITERATIONS of them)
+        def again(_, x):
+            _, lam = from_solver_order(system, x)
+            return linear_solver.compute(f, to_solver_order(
+                system, rhs_q + system.reaction_force(q, v, t, lam), gamma))
+        x = jax.lax.fori_loop(0, REACTION_ITERATIONS, again, x)
     return from_solver_order(system, x)
 
 
@@ -202,6 +217,8 @@ def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac, load_fa
       sliding coordinates). The joints are linear in the beam coordinates (Eqs. 19–20
       are linear in e), so its chain–chain block is zero; the coupling of a massless
       sliding coordinate to the cable through λ·S'(s) is essential for Newton;
+    * reaction-dependent forces (friction): their exact linearization in q, v and λ
+      (:func:`ancf_jax.forces.reaction_force_tangent`), a non-symmetric low-rank term;
     * force elements: each element's exact local linearization
       (:func:`ancf_jax.forces.force_tangent`) over the coordinates it acts on,
       added as a low-rank term (auxiliary unknowns of :class:`SaddleMatrix`), so a
@@ -235,6 +252,16 @@ def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac, load_fa
         for f in system.forces:
             p, a = force_tangent(f, system, q, v, t, gamma_p, load_factor)
             ps.append(jnp.concatenate([p[:, perm], jnp.zeros((p.shape[0], m), p.dtype)], axis=1))
+            as_.append(a)
+        matrix = matrix.with_low_rank(jnp.concatenate(ps), jax.scipy.linalg.block_diag(*as_))
+    if system.reaction_forces:
+        # friction: ∂Q_r/∂(q, v, λ), non-symmetric, over its coordinates and multipliers
+        perm = solver_permutation(system)
+        n = system.n_coordinates
+        ps, as_ = [], []
+        for f in system.reaction_forces:
+            p, a = reaction_force_tangent(f, system, q, v, lam, t, gamma_p)
+            ps.append(jnp.concatenate([p[:, :n][:, perm], p[:, n:]], axis=1))
             as_.append(a)
         matrix = matrix.with_low_rank(jnp.concatenate(ps), jax.scipy.linalg.block_diag(*as_))
     return matrix

@@ -13,6 +13,10 @@ the two partial bases that fix the parts it does not have:
 :class:`AbstractConservativeForce` (a potential only: springs, user energies) and
 :class:`AbstractLoad` (a prescribed load only).
 
+Forces that depend on the joint reactions λ (friction proportional to a normal force)
+are :class:`AbstractReactionForce` elements, held apart in ``System.reaction_forces``.
+One-sided members (ropes, stops) are :class:`AbstractOneSidedSpringDamper`.
+
 Point forces map to generalized forces through the point's Jacobian by one
 vector-Jacobian product, Q = J_pᵀ F, never a hand-written Jacobian.
 
@@ -27,7 +31,7 @@ the element's few coordinates, not by the size of the system.
 from __future__ import annotations
 
 import abc
-from typing import Callable, Optional
+from typing import Callable, ClassVar, Optional
 
 import equinox as eqx
 import jax
@@ -96,6 +100,14 @@ class AbstractLoad(AbstractForce):
         return jnp.zeros_like(q)
 
 
+def _selection(idx, size, dtype):
+    """(k, size) one-hot rows selecting the indices idx, repeated indices counted once."""
+    k = idx.shape[0]
+    earlier = jnp.arange(k)[:, None] > jnp.arange(k)[None, :]
+    first = ~jnp.any((idx[:, None] == idx[None, :]) & earlier, axis=1)
+    return jax.nn.one_hot(idx, size, dtype=dtype) * first[:, None]
+
+
 def force_tangent(force: AbstractForce, system, q, v, t, damping_coef, load_factor=1.0):
     """Linearization of one force element for a Newton matrix.
 
@@ -112,10 +124,8 @@ def force_tangent(force: AbstractForce, system, q, v, t, damping_coef, load_fact
     n = q.shape[0]
     idx = force.coordinates(system, q)
     idx = jnp.arange(n) if idx is None else jnp.asarray(idx)
+    p = _selection(idx, n, q.dtype)
     k = idx.shape[0]
-    earlier = jnp.arange(k)[:, None] > jnp.arange(k)[None, :]
-    first = ~jnp.any((idx[:, None] == idx[None, :]) & earlier, axis=1)
-    p = jax.nn.one_hot(idx, n, dtype=q.dtype) * first[:, None]
 
     def local(d):
         dq = p.T @ d
@@ -162,6 +172,48 @@ class BeamMassLoad(AbstractLoad):
 
     def coordinates(self, system, q):
         return system.beam_offset(self.beam) + jnp.arange(system.beams[self.beam].n_coordinates)
+class AbstractReactionForce(eqx.Module):
+    """A dissipative force that depends on joint reactions: Q(q, v, t, λ), e.g. Coulomb
+    friction proportional to a normal reaction (:class:`ancf_jax.sliding.SlidingFriction`).
+
+    It enters the implicit residual M q̈ − Q − Q_r(q, v, t, λ) + Φ_qᵀ λ with its exact
+    linearization in q, v and λ (:func:`reaction_force_tangent`, a non-symmetric
+    low-rank term of the Newton matrix), the index-1 accelerations by a fixed-point
+    iteration on λ (:func:`ancf_jax.dae.accelerations`), and the energy balance as
+    dissipation −v·Q_r. Statics leaves it out (it vanishes at rest for the laws here).
+    """
+
+    name: str = eqx.field(static=True)
+
+    @abc.abstractmethod
+    def generalized_force(self, system, q, v, t, lam):
+        """Q_r(q, v, t, λ), shape (n,); its power v·Q_r must be ≤ 0."""
+
+    @abc.abstractmethod
+    def coordinates(self, system, q):
+        """Indices of q the force depends on and acts on, int array of fixed length."""
+
+    @abc.abstractmethod
+    def multiplier_indices(self, system):
+        """Indices of λ the force depends on, int array of fixed length."""
+
+
+def reaction_force_tangent(force: AbstractReactionForce, system, q, v, lam, t, damping_coef):
+    """Linearization of a reaction-dependent force for a Newton matrix in the unknowns
+    (q, λ): with P (k, n + m) the selection of its coordinates and multipliers,
+    returns ``(P, A)``, A = −P ∂[Q_r; 0]/∂(q, λ) Pᵀ with ∂/∂q including c_v ∂/∂v
+    (c_v = ``damping_coef``), so that its contribution is Pᵀ A P (non-symmetric)."""
+    n, m = q.shape[0], lam.shape[0]
+    idx = jnp.concatenate([jnp.asarray(force.coordinates(system, q)),
+                           n + jnp.asarray(force.multiplier_indices(system))])
+    p = _selection(idx, n + m, q.dtype)
+
+    def local(d):
+        dx = p.T @ d
+        dq, dl = dx[:n], dx[n:]
+        return p[:, :n] @ force.generalized_force(system, q + dq, v + damping_coef * dq, t, lam + dl)
+
+    return p, -jax.jacfwd(local)(jnp.zeros(idx.shape[0], q.dtype))
 
 
 class PointForce(AbstractLoad):
@@ -230,3 +282,92 @@ class SpringDamper(AbstractForce):
 
     def coordinates(self, system, q):
         return jnp.concatenate([self.a.coordinates(system, q), self.b.coordinates(system, q)])
+
+
+class AbstractOneSidedSpringDamper(AbstractForce):
+    """A spring-damper between two points that acts on one side only: a rope, dropper or
+    hanger (tension only) or a stop or buffer (compression only).
+
+    With x = ℓ − ℓ₀ the extension and σ = :attr:`sense` (+1: tension only, −1:
+    compression only), the member is engaged while σx > 0, with the engaged extension
+    e = max(σx, 0) [m]. Its parts:
+
+    * potential V = ½ k e² [J] (conservative, C¹ in q: the force is continuous at
+      the slack/taut transition, the stiffness jumps from 0 to k);
+    * damping only while engaged, limited so that the member never pushes (tension
+      only) or pulls (compression only): d = max(c σℓ̇, −k e) if e > 0 else 0 [N], so
+      the member force σ(k e + d) has the sign σ or is zero. Its power d σℓ̇ ≥ 0 is
+      dissipation in the energy balance.
+
+    :meth:`tension` is the member force [N] (positive in tension); :meth:`engaged`
+    the taut (or, compression only, the closed) state.
+
+    Attributes:
+        stiffness: k [N/m].
+        damping: c [N·s/m].
+        rest_length: ℓ₀ [m] (slack length of a rope, gap of a stop).
+    """
+
+    a: AbstractPoint
+    b: AbstractPoint
+    stiffness: jnp.ndarray
+    damping: jnp.ndarray
+    rest_length: jnp.ndarray
+
+    @property
+    @abc.abstractmethod
+    def sense(self) -> float:
+        """σ: +1 (tension only) or −1 (compression only)."""
+
+    def length(self, system, q):
+        """Current distance ℓ between the points [m]."""
+        d = self.a.position(system, q) - self.b.position(system, q)
+        return jnp.sqrt(jnp.dot(d, d))
+
+    def engaged_extension(self, system, q):
+        """e = max(σ (ℓ − ℓ₀), 0) [m]."""
+        return jnp.maximum(self.sense * (self.length(system, q) - self.rest_length), 0.0)
+
+    def engaged(self, system, q):
+        """Whether the member is taut (tension only) or closed (compression only)."""
+        return self.engaged_extension(system, q) > 0.0
+
+    def _damper(self, system, q, v):
+        """The limited damper force d [N] (class docstring)."""
+        e = self.engaged_extension(system, q)
+        ell_dot = jax.jvp(lambda qq: self.length(system, qq), (q,), (v,))[1]
+        d = jnp.where(e > 0.0, jnp.maximum(self.damping * self.sense * ell_dot, -self.stiffness * e), 0.0)
+        return d
+
+    def tension(self, system, q, v):
+        """Member force σ (k e + d) [N], positive in tension, zero while disengaged."""
+        e = self.engaged_extension(system, q)
+        return self.sense * (self.stiffness * e + self._damper(system, q, v))
+
+    def potential(self, system, q, t):
+        return 0.5 * self.stiffness * self.engaged_extension(system, q) ** 2
+
+    def applied_force(self, system, q, v, t):
+        return jnp.zeros_like(q)
+
+    def dissipative_force(self, system, q, v):
+        d = self._damper(system, q, v)
+        _, vjp = jax.vjp(lambda qq: self.length(system, qq), q)
+        return vjp(-self.sense * d)[0]
+
+    def coordinates(self, system, q):
+        return jnp.concatenate([self.a.coordinates(system, q), self.b.coordinates(system, q)])
+
+
+class TensionOnlySpringDamper(AbstractOneSidedSpringDamper):
+    """A rope, dropper or hanger: resists extension only (σ = +1,
+    :class:`AbstractOneSidedSpringDamper`)."""
+
+    sense: ClassVar[float] = 1.0
+
+
+class CompressionOnlySpringDamper(AbstractOneSidedSpringDamper):
+    """A stop or buffer: resists shortening only (σ = −1,
+    :class:`AbstractOneSidedSpringDamper`)."""
+
+    sense: ClassVar[float] = -1.0

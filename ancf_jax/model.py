@@ -32,15 +32,17 @@ import numpy as np
 from . import dae
 from . import joints as J
 from . import points as P
-from .beam import Beam
+from .beam import AttachedMasses, Beam
 from .bodies import RigidBodies
 from .element.laws import check_law
 from .element.strain_energy import Formulation
 from .errors import ConstraintError, ModelError, VelocityProjectionWarning
-from .forces import BeamMassLoad, BodyMassLoad, PointForce, PointTorque, SpringDamper
+from .forces import (BeamMassLoad, BodyMassLoad, CompressionOnlySpringDamper, PointForce, PointTorque,
+                     SpringDamper, TensionOnlySpringDamper)
 from .mesh import BeamMesh, pad
 from .newton import ModifiedNewton
 from .section import Section
+from .sliding import DEFAULT_REGULARIZATION, ConstantSpeed, SlidingDriveForce, SlidingFriction, SlidingServo
 from .system import State, System
 from .validation import (check_choice, check_finite, check_nonnegative, check_positive,
                          check_vector)
@@ -127,6 +129,9 @@ class Model:
         self._sliders: dict[str, dict] = {}
         self._joints: list[tuple[str, str, dict]] = []
         self._forces: list[tuple[str, str, dict]] = []
+        self._attached: list[tuple[str, str, float, float]] = []
+        self._friction: list[tuple[str, str, dict]] = []
+        self._drives: list[tuple[str, str, str, dict]] = []
         self._names: set[str] = set()
 
     # ------------------------------------------------------------------ entities
@@ -267,6 +272,17 @@ class Model:
                                                              time_function=time_function)))
         return name
 
+    def attached_mass(self, name: str, beam: str, s: float, mass: float) -> str:
+        """A point mass ``mass`` [kg] > 0 fixed to the material point of ``beam`` at
+        reference arc length ``s`` [m] (a clamp or spacer on a wire), translation only:
+        consistent added mass m Sᵀ S and its weight, see
+        :class:`~ancf_jax.beam.AttachedMasses`."""
+        m = check_positive(f"mass of attached mass {name!r}", mass, "kg")
+        s0 = check_nonnegative(f"arc length s of attached mass {name!r}", s, "m")
+        self._claim(name, "attached mass")
+        self._attached.append((name, beam, float(s0), float(m)))
+        return name
+
     # ------------------------------------------------------------------ joints
     def clamp(self, name: str, beam: str, node: int = 0, *, mode: str = "full") -> str:
         """Clamp a beam node to the ground at its initial position and slope.
@@ -360,6 +376,63 @@ class Model:
                                                       function=function)))
         return name
 
+    def slider_friction(self, name: str, slider: str, *, mu, regularization=DEFAULT_REGULARIZATION,
+                        viscous=0.0) -> str:
+        """Coulomb friction on sliding joint ``slider``: −μ N tanh(u / v_ε) − c u [N] on
+        the body along the beam, N the joint's normal reaction, u the sliding speed
+        (:class:`~ancf_jax.sliding.SlidingFriction`).
+
+        Args:
+            mu: friction coefficient μ >= 0.
+            regularization: v_ε [m/s] > 0 (default 1e-3): a body held by friction
+                creeps at v_ε artanh(F / (μN)) under a tangential load F < μN.
+            viscous: c [N·s/m] >= 0.
+        """
+        mu = check_nonnegative(f"mu of friction {name!r}", mu)
+        ve = check_positive(f"regularization of friction {name!r}", regularization, "m/s")
+        c = check_nonnegative(f"viscous of friction {name!r}", viscous, "N*s/m")
+        self._claim(name, "force")
+        self._friction.append((name, slider, dict(mu=mu, regularization=ve, viscous=c)))
+        return name
+
+    def slider_drive(self, name: str, slider: str, *, position: Callable | None = None,
+                     force=None, time_function: Callable | None = None, speed=None, gain=None,
+                     max_force=None) -> str:
+        """Drive sliding joint ``slider`` (give exactly one of ``position``, ``force``,
+        ``speed``; :mod:`ancf_jax.sliding`):
+
+        * ``position``: the arc length follows s(t) = ``position(t)`` [m] (a joint named
+          ``name``; the drive force is its reaction, the work the constraint work);
+        * ``force``: a tangential force F [N] on the body along +s (reaction on the
+          beam), scaled by ``time_function(t)`` if given;
+        * ``speed``: a velocity servo F = F_max tanh(k (u* − u)/F_max) to the sliding
+          speed u* [m/s] (a number or a function of t), with ``gain`` k [N·s/m] > 0 and
+          ``max_force`` F_max [N] > 0.
+        """
+        given = [k for k, x in (("position", position), ("force", force), ("speed", speed)) if x is not None]
+        if len(given) != 1:
+            raise ModelError(f"drive {name!r} needs exactly one of position, force, speed, got "
+                             f"{', '.join(given) or 'none'}")
+        kind = given[0]
+        if kind == "position":
+            if not callable(position):
+                raise ModelError(f"position of drive {name!r} must be a callable s(t) [m]")
+            a = dict(function=position)
+        elif kind == "force":
+            f = float(check_finite(f"force of drive {name!r}", force))
+            if time_function is not None and not callable(time_function):
+                raise ModelError(f"time_function of drive {name!r} must be callable")
+            a = dict(force=f, time_function=time_function)
+        else:
+            if not callable(speed):
+                u = float(check_finite(f"speed of drive {name!r}", speed))
+                speed = ConstantSpeed(u)
+            a = dict(speed=speed, gain=check_positive(f"gain of drive {name!r}", gain, "N*s/m"),
+                     max_force=check_positive(f"max_force of drive {name!r}", max_force, "N"))
+        self._claim(name, "joint" if kind == "position" else "force")
+        self._drives.append((kind, name, slider, a))
+        return name
+
     def prescribe_point(self, name: str, point: PointRef, function: Callable) -> str:
         """The point follows ``function(t) -> (x, y)`` [m] (JAX-traceable)."""
         if not callable(function):
@@ -396,14 +469,22 @@ class Model:
         return name
 
     def spring_damper(self, name: str, a: PointRef, b: PointRef, *, stiffness, damping=0.0,
-                      rest_length=None) -> str:
+                      rest_length=None, acts: str = "both") -> str:
         """Linear spring-damper between two points; rest length defaults to the
-        initial distance."""
+        initial distance.
+
+        ``acts``: ``"both"`` (default, :class:`~ancf_jax.forces.SpringDamper`),
+        ``"tension"`` (a rope, dropper or hanger: slack while shorter than the rest
+        length) or ``"compression"`` (a stop or buffer: open while longer), see
+        :class:`~ancf_jax.forces.AbstractOneSidedSpringDamper`.
+        """
         k = check_nonnegative(f"stiffness of {name!r}", stiffness, "N/m")
         c = check_nonnegative(f"damping of {name!r}", damping, "N*s/m")
         l0 = None if rest_length is None else check_nonnegative(f"rest_length of {name!r}", rest_length, "m")
+        check_choice(f"acts of spring-damper {name!r}", acts, ("both", "tension", "compression"))
         self._claim(name, "force")
-        self._forces.append(("spring_damper", name, dict(a=a, b=b, stiffness=k, damping=c, rest_length=l0)))
+        self._forces.append(("spring_damper", name, dict(a=a, b=b, stiffness=k, damping=c, rest_length=l0,
+                                                         acts=acts)))
         return name
 
     # ------------------------------------------------------------------ names
@@ -510,6 +591,18 @@ class Model:
                 rotating(a["body"], what, "a body point away from the centre")
             beam(a["beam"], what)
             arc_ok(a["beam"], a["s"], what, "initial arc length s =")
+        for name, slider, _ in self._friction:
+            if slider not in self._sliders:
+                raise ModelError(f"friction {name!r} refers to sliding joint {slider!r}, which does not exist "
+                                 f"(sliding joints: {', '.join(map(repr, self._sliders)) or 'none'})")
+        for _, name, slider, _ in self._drives:
+            if slider not in self._sliders:
+                raise ModelError(f"drive {name!r} refers to sliding joint {slider!r}, which does not exist "
+                                 f"(sliding joints: {', '.join(map(repr, self._sliders)) or 'none'})")
+        for name, b, s, _ in self._attached:
+            what = f"attached mass {name!r}"
+            beam(b, what)
+            arc_ok(b, s, what)
         for kind, name, a in self._forces:
             what = f"force {name!r}"
             if kind == "torque":
@@ -559,9 +652,12 @@ class Model:
                     if int(target) < n:
                         raise ModelError(f"pad_to for beam {name!r} must be >= its {n} elements, got {target}")
                     mesh = pad(mesh, int(target))
+            on_beam = [(s, m) for _, b, s, m in self._attached if b == name]
+            attached = (AttachedMasses(jnp.asarray([s for s, _ in on_beam], float),
+                                       jnp.asarray([m for _, m in on_beam], float)) if on_beam else None)
             beams.append(Beam(mesh, spec.section, alpha=spec.alpha, beta=spec.beta,
                               formulation=spec.formulation, axial_law=spec.axial_law,
-                              bending_law=spec.bending_law))
+                              bending_law=spec.bending_law, attached=attached))
             ref = np.asarray(mesh.reference_nodes)
             x0 = ref.copy()
             if spec.initial_nodes is not None:
@@ -665,12 +761,22 @@ class Model:
             k = body_of(a["body"], what)
             b = beam_of(a["beam"], what)
             constraints.append(J.SlidingJoint(name, b, j, P.BodyPoint(k, jnp.asarray(a["local"], float))))
-            if (a["hold"] if hold is None else hold):
+            driven = any(kind == "position" and sl == name for kind, _, sl, _ in self._drives)
+            if (a["hold"] if hold is None else hold) and not driven:  # a position drive holds it
                 constraints.append(J.SlidingHold(f"{name}.hold", j, jnp.asarray(a["s"], float)))
         for k, name in enumerate(body_names):
             if self._bodies[name].point_mass:
                 constraints.append(J.FixedCoordinate(f"{name}.rotation", skeleton.body_offset(k) + 2,
                                                      jnp.zeros(())))
+        for kind, name, slider, a in self._drives:
+            if kind == "position":
+                constraints.append(J.PrescribedCoordinate(
+                    name, skeleton.sliding_offset + slider_names.index(slider), a["function"]))
+        joint_index = {c.name: k for k, c in enumerate(constraints)}
+        reaction_forces = tuple(
+            SlidingFriction(name, joint_index[slider], jnp.asarray(a["mu"], float),
+                            jnp.asarray(a["regularization"], float), jnp.asarray(a["viscous"], float))
+            for name, slider, a in self._friction)
 
         # ---- forces
         forces = []
@@ -687,8 +793,10 @@ class Model:
                 l0 = a["rest_length"]
                 if l0 is None:
                     l0 = float(np.linalg.norm(initial_position(pa) - initial_position(pb)))
-                forces.append(SpringDamper(name, pa, pb, jnp.asarray(a["stiffness"], float),
-                                           jnp.asarray(a["damping"], float), jnp.asarray(l0, float)))
+                law = {"both": SpringDamper, "tension": TensionOnlySpringDamper,
+                       "compression": CompressionOnlySpringDamper}[a["acts"]]
+                forces.append(law(name, pa, pb, jnp.asarray(a["stiffness"], float),
+                                  jnp.asarray(a["damping"], float), jnp.asarray(l0, float)))
             elif kind == "mass_proportional":
                 acc = jnp.asarray(a["acceleration"], float)
                 if a["item"] in self._bodies:
@@ -696,12 +804,22 @@ class Model:
                 else:
                     forces.append(BeamMassLoad(name, beam_of(a["item"]), acc, a["time_function"]))
 
+        for kind, name, slider, a in self._drives:
+            j = slider_names.index(slider)
+            b = beam_of(self._sliders[slider]["beam"])
+            if kind == "force":
+                forces.append(SlidingDriveForce(name, b, j, jnp.asarray(a["force"], float), a["time_function"]))
+            elif kind == "speed":
+                forces.append(SlidingServo(name, b, j, a["speed"], jnp.asarray(a["gain"], float),
+                                           jnp.asarray(a["max_force"], float)))
+
         gravity_off = tuple(n for n in body_names if not self._bodies[n].gravity) + tuple(
             n for n in beam_names if not self._beams[n].gravity)
         system = System(bodies, tuple(beams), tuple(constraints), tuple(forces),
                         jnp.asarray(self.gravity, float), n_sliding=len(slider_names),
                         body_names=tuple(body_names), beam_names=tuple(beam_names),
-                        sliding_names=tuple(slider_names), gravity_off=gravity_off)
+                        sliding_names=tuple(slider_names), gravity_off=gravity_off,
+                        reaction_forces=reaction_forces)
         v0 = np.asarray(system.pack(body_vel, vel0, s_rate))
         state = State(jnp.asarray(q0), jnp.asarray(v0), jnp.zeros(()))
         if assemble:

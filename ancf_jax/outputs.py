@@ -18,7 +18,8 @@ import numpy as np
 from .errors import ModelError
 from .results import Results
 
-KINDS = ("node", "point", "body", "sliding", "sliding_point", "stress", "reaction", "energy")
+KINDS = ("node", "point", "body", "sliding", "sliding_point", "stress", "reaction", "energy", "member",
+         "friction", "drive")
 COMPONENTS = {
     "node": ("x", "y", "slope_x", "slope_y"),
     "point": ("x", "y"),
@@ -27,6 +28,9 @@ COMPONENTS = {
     "sliding_point": ("x", "y"),
     "stress": ("sigma",),
     "reaction": ("normal", "tangential", "0", "1", "2", "3"),
+    "member": ("tension", "engaged"),
+    "friction": ("force", "normal"),
+    "drive": ("force",),
     "energy": ("kinetic", "gravity", "strain", "springs", "dissipated", "external", "constraint",
                "total", "balance_error"),
 }
@@ -42,7 +46,10 @@ class Output:
             arc length ``s``), ``"body"`` (pose), ``"sliding"`` (sliding coordinate s),
             ``"sliding_point"`` (position of a sliding joint's point on its beam),
             ``"stress"`` (bending stress, Eq. 18), ``"reaction"`` (joint multiplier
-            component, or normal/tangential reaction of a sliding joint), ``"energy"``.
+            component, or normal/tangential reaction of a sliding joint), ``"energy"``,
+            ``"member"`` (force [N] and engaged state of a spring-damper named ``target``),
+            ``"friction"`` (friction force and normal reaction [N] of a sliding
+            friction), ``"drive"`` (tangential force [N] of a sliding drive).
         target: beam, body or joint name (unused for energy).
         component: see :data:`COMPONENTS`.
         node: node index (``"node"``); negative counts from the last node.
@@ -109,6 +116,12 @@ def evaluate(results: Results, outputs: Iterable[Output]) -> dict[str, np.ndarra
                 val = results.sliding_reaction(o.target)[:, 0 if o.component == "normal" else 1]
             else:
                 val = results.multipliers(o.target)[:, int(o.component)]
+        elif o.kind == "friction":
+            val = results.friction(o.target)[:, 0 if o.component == "force" else 1]
+        elif o.kind == "drive":
+            val = results.drive_force(o.target)
+        elif o.kind == "member":
+            val = results.member(o.target)[:, 0 if o.component == "tension" else 1]
         else:
             energy = results.energy() if energy is None else energy
             val = energy[o.component]

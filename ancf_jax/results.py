@@ -19,7 +19,9 @@ import jax.numpy as jnp
 import numpy as np
 
 from .errors import ModelError
-from .joints import SlidingJoint
+from .forces import AbstractOneSidedSpringDamper, SpringDamper
+from .joints import PrescribedCoordinate, SlidingJoint
+from .sliding import AbstractSlidingDrive
 from .system import System
 
 
@@ -39,6 +41,31 @@ def _violations(system: System, q, v, t):
         return jnp.stack([jnp.max(jnp.abs(system.constraint(qq, tt))),
                           jnp.max(jnp.abs(system.constraint_velocity(qq, vv, tt)))])
     return jax.vmap(one)(q, v, t)
+
+
+@eqx.filter_jit
+def _member_history(system: System, force, q, v):
+    """(tension [N], engaged 0/1) of a spring-damper per row, shape (N, 2)."""
+    def one(qq, vv):
+        if isinstance(force, SpringDamper):
+            ell = force.length(system, qq)
+            ell_dot = jax.jvp(lambda z: force.length(system, z), (qq,), (vv,))[1]
+            return jnp.stack([force.stiffness * (ell - force.rest_length) + force.damping * ell_dot,
+                              jnp.ones(())])
+        return jnp.stack([force.tension(system, qq, vv), force.engaged(system, qq).astype(qq.dtype)])
+    return jax.vmap(one)(q, v)
+
+
+@eqx.filter_jit
+def _friction_history(system: System, friction, q, v, lam):
+    """(friction force, normal reaction) [N] per row, shape (N, 2)."""
+    return jax.vmap(lambda qq, vv, ll: jnp.stack([friction.tangential_force(system, qq, vv, ll),
+                                                  friction.normal_force(system, qq, ll)]))(q, v, lam)
+
+
+@eqx.filter_jit
+def _drive_history(system: System, drive, q, v, t):
+    return jax.vmap(lambda qq, vv, tt: drive.tangential_force(system, qq, vv, tt))(q, v, t)
 
 
 # jitted histories over the output rows; numeric parameters are traced (no recompiling
@@ -182,7 +209,8 @@ class Results:
         """Reaction of a sliding joint on its body: (normal, tangential) components
         along the beam normal (left of the tangent) and tangent [N], shape (N, 2).
 
-        Frictionless: the tangential component is zero up to round-off.
+        Frictionless and undriven: the tangential component is zero up to round-off;
+        otherwise it is the sum of the friction and drive forces.
         """
         joint = next((c for c in self.system.constraints
                       if isinstance(c, SlidingJoint) and c.name == name), None)
@@ -195,6 +223,49 @@ class Results:
         tangent = tangent / np.linalg.norm(tangent, axis=1, keepdims=True)
         normal = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
         return np.stack([np.sum(force * normal, axis=1), np.sum(force * tangent, axis=1)], axis=1)
+
+    def force_element(self, name: str):
+        """The force element called ``name`` of the system."""
+        names = tuple(f.name for f in self.system.forces)
+        return self.system.forces[self._index(names, name, "force element")]
+
+    def member(self, name: str) -> np.ndarray:
+        """Member force [N] (positive in tension) and engaged state (1: taut or closed,
+        0: slack or open; linear spring-dampers are always 1) of a spring-damper,
+        shape (N, 2)."""
+        f = self.force_element(name)
+        if not isinstance(f, (SpringDamper, AbstractOneSidedSpringDamper)):
+            raise ModelError(f"force element {name!r} is not a spring-damper")
+        return np.asarray(_member_history(self.system, f, jnp.asarray(self.q), jnp.asarray(self.v)))
+
+    def friction(self, name: str) -> np.ndarray:
+        """Friction force F [N] on the body along +s (its reaction acts on the beam) and
+        the normal reaction N [N] of a sliding friction named ``name``, shape (N, 2)."""
+        names = tuple(f.name for f in self.system.reaction_forces)
+        f = self.system.reaction_forces[self._index(names, name, "friction")]
+        return np.asarray(_friction_history(self.system, f, jnp.asarray(self.q), jnp.asarray(self.v),
+                                            jnp.asarray(self.lam)))
+
+    def drive_force(self, name: str) -> np.ndarray:
+        """Tangential force [N] of a sliding drive named ``name`` on the body along +s
+        (:meth:`~ancf_jax.model.Model.slider_drive`: for a prescribed arc length the
+        reaction −λ_d/|r'(s)| of its constraint), shape (N,)."""
+        drives = {f.name: f for f in self.system.forces if isinstance(f, AbstractSlidingDrive)}
+        if name in drives:
+            return np.asarray(_drive_history(self.system, drives[name], jnp.asarray(self.q),
+                                             jnp.asarray(self.v), jnp.asarray(self.t)))
+        joint = next((c for c in self.system.constraints if c.name == name
+                      and isinstance(c, PrescribedCoordinate)
+                      and c.index >= self.system.sliding_offset), None)
+        if joint is None:
+            known = list(drives) + [c.name for c in self.system.constraints if isinstance(c, PrescribedCoordinate)
+                                    and c.index >= self.system.sliding_offset]
+            raise ModelError(f"no sliding drive named {name!r} (known: {', '.join(map(repr, known)) or 'none'})")
+        j = joint.index - self.system.sliding_offset
+        slider = next(c for c in self.system.constraints if isinstance(c, SlidingJoint) and c.sliding == j)
+        s = self.q[:, joint.index]
+        slope = np.asarray(_slope_history(self.system, slider.beam, jnp.asarray(self.q), jnp.asarray(s)))
+        return -self.multipliers(name)[:, 0] / np.linalg.norm(slope, axis=1)
 
     # ------------------------------------------------------------------ stress
     def stress(self, beam: str, s: float, y: float | None = None, measure: str = "exact") -> np.ndarray:

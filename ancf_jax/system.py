@@ -50,6 +50,9 @@ class System(eqx.Module):
         forces: force elements added by the user.
         gravity: acceleration of gravity [m/s²], shape (2,).
         n_sliding: number of sliding coordinates (static).
+        reaction_forces: forces that depend on the multipliers λ (friction,
+            :class:`~ancf_jax.forces.AbstractReactionForce`); empty: none, and nothing
+            of them is traced.
         body_names, beam_names, sliding_names: names for messages and outputs (static).
         gravity_off: names of the bodies and beams that gravity does not act on (static;
             empty: on all).
@@ -65,6 +68,7 @@ class System(eqx.Module):
     beam_names: tuple = eqx.field(static=True, default=())
     sliding_names: tuple = eqx.field(static=True, default=())
     gravity_off: tuple = eqx.field(static=True, default=())
+    reaction_forces: tuple = ()
 
     # ------------------------------------------------------------------ layout
     @property
@@ -279,6 +283,17 @@ class System(eqx.Module):
         for f in self.forces:
             out = out + f.generalized_force(self, q, v, t, load_factor)
         return out
+
+    def reaction_force(self, q, v, t, lam):
+        """Σ Q_r(q, v, t, λ) of the reaction-dependent forces (friction), shape (n,)."""
+        out = jnp.zeros_like(q)
+        for f in self.reaction_forces:
+            out = out + f.generalized_force(self, q, v, t, lam)
+        return out
+
+    def constraint_offset(self, k: int) -> int:
+        """Index in λ of the first equation of constraint k."""
+        return sum(c.size for c in self.constraints[:k])
 
     # ------------------------------------------------------------------ constraints
     def constraint(self, q, t=0.0):

@@ -131,6 +131,8 @@ class GeneralizedAlpha(AbstractIntegrator):
         def residual(y):
             q1, v1, qdd, _, lam = kinematics(y)
             r_q = system.mass_times(qdd) - system.generalized_force(q1, v1, t1)
+            if system.reaction_forces:
+                r_q = r_q - system.reaction_force(q1, v1, t1, lam)
             if system.n_constraints:
                 phi, vjp = jax.vjp(lambda qq: system.constraint(qq, t1), q1)
                 r_q = r_q + vjp(lam)[0]

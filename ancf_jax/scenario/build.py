@@ -144,6 +144,8 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
                        initial_nodes=nodes, initial_velocities=vel, gravity=b.gravity,
                        axial_law=law_of(b.axial_law), bending_law=law_of(b.bending_law))
             shapes[name] = (Beam(mesh, section), np.asarray(mesh.reference_nodes) if nodes is None else nodes)
+            for i, pm in enumerate(b.masses):
+                m.attached_mass(f"{name}.masses[{i}]", name, on_beam(pm.s, lengths[name]), pm.mass)
 
     poses: dict[str, tuple[float, float, float]] = {}
     for name, b in spec.bodies.items():
@@ -173,6 +175,15 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
             elif j.type == "sliding":
                 m.slider(name, j.body, j.beam, on_beam(j.s, lengths[j.beam]), local=j.local, hold=j.hold,
                          rate=j.rate)
+                if j.friction is not None:
+                    f = j.friction
+                    m.slider_friction(f"{name}.friction", name, mu=f.mu, regularization=f.regularization,
+                                      viscous=f.viscous)
+                if j.drive is not None:
+                    d = j.drive
+                    m.slider_drive(f"{name}.drive", name, position=d.position, force=d.force,
+                                   time_function=d.time_function, speed=d.speed, gain=d.gain,
+                                   max_force=d.max_force)
             elif j.type == "coordinate":
                 m.coordinate(name, point_ref(spec, lengths, j.point), j.component, value=j.value,
                              function=j.function)
@@ -191,7 +202,8 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
                 m.mass_proportional_load(name, f.item, f.acceleration, f.time_function)
             else:
                 m.spring_damper(name, point_ref(spec, lengths, f.a), point_ref(spec, lengths, f.b),
-                                stiffness=f.stiffness, damping=f.damping, rest_length=f.rest_length)
+                                stiffness=f.stiffness, damping=f.damping, rest_length=f.rest_length,
+                                acts=f.acts)
     return m
 
 
@@ -248,6 +260,10 @@ def make_outputs(spec: S.ScenarioSpec) -> list[Output]:
         elif o.type == "reaction":
             out.append(Output(name, "reaction", o.joint,
                               o.component if o.component is not None else str(o.index)))
+        elif o.type in ("friction", "drive"):
+            out.append(Output(name, o.type, f"{o.joint}.{o.type}", o.component))
+        elif o.type == "member":
+            out.append(Output(name, "member", o.load, o.component))
         else:
             out.append(Output(name, "energy", "", o.component))
     return out

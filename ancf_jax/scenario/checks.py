@@ -174,6 +174,8 @@ class Checker:
                                   "an angle different from start_angle [rad]")
             self.elements[name] = element_count(b)
             self.lengths[name] = reference_length(g, self.elements[name])
+            for i, pm in enumerate(b.masses):
+                self.arc_length(path + ("masses", i, "s"), name, pm.s)
             self.section(path + ("section",), b.section)
             self.laws(path, b)
             if b.formulation.curvature == "small_strain" and not isinstance(g, S.Straight):
@@ -298,6 +300,22 @@ class Checker:
             if j.type == "sliding":
                 self.beam(path + ("beam",), j.beam)
                 self.arc_length(path + ("s",), j.beam, j.s, "initial arc length s =")
+                d = j.drive
+                if d is not None:
+                    given = [k for k in ("position", "force", "speed") if getattr(d, k) is not None]
+                    if len(given) != 1:
+                        raise Invalid(path + ("drive",), f"{len(given)} of position, force, speed given"
+                                      + (f" ({', '.join(given)})" if given else ""),
+                                      "exactly one of position, force, speed")
+                    for k in ("gain", "max_force"):
+                        if (getattr(d, k) is None) == (given[0] == "speed"):
+                            raise Invalid(path + ("drive", k), "missing for a speed servo" if given[0] == "speed"
+                                          else f"only a speed servo takes it (this drive gives {given[0]})",
+                                          "a number > 0 with speed, else no key")
+                    if d.time_function is not None and given[0] != "force":
+                        raise Invalid(path + ("drive", "time_function"),
+                                      f"only a force drive takes it (this drive gives {given[0]})",
+                                      "no key, or force = F")
 
     def rotating(self, path, body, what):
         if self.spec.bodies[body].point_mass:
@@ -363,8 +381,11 @@ class Checker:
         sol = self.spec.solver
         for group in ("joints", "loads"):
             for name, item in getattr(self.spec, group).items():
-                for key in type(item).model_fields:
-                    f = getattr(item, key)
+                nested = getattr(item, "drive", None)
+                fields = [(key, getattr(item, key)) for key in type(item).model_fields]
+                if nested is not None:
+                    fields += [(f"drive.{key}", getattr(nested, key)) for key in type(nested).model_fields]
+                for key, f in fields:
                     if not isinstance(f, TimeFunctionSpec) or f.kind != "expression":
                         continue
                     values = f.function.numpy(times)
@@ -418,6 +439,19 @@ class Checker:
                 if o.index is not None and o.index >= size:
                     raise Invalid(path + ("index",), f'joint "{o.joint}" has {size} equations',
                                   f"an integer 0 .. {size - 1}")
+
+            elif o.type in ("friction", "drive"):
+                self.joint(path + ("joint",), o.joint, ("sliding",))
+                if getattr(self.spec.joints[o.joint], o.type) is None:
+                    raise Invalid(path + ("joint",), f'sliding joint "{o.joint}" has no {o.type}',
+                                  f"a sliding joint with a {o.type} table")
+            elif o.type == "member":
+                f = self.spec.loads.get(o.load)
+                if f is None or f.type != "spring_damper":
+                    known = ", ".join(f'"{n}"' for n, l in self.spec.loads.items()
+                                      if l.type == "spring_damper") or "none"
+                    raise Invalid(path + ("load",), f'"{o.load}" is not a spring_damper of [loads]',
+                                  f"one of: {known}")
 
     def fatigue(self):
         f = self.spec.fatigue

@@ -186,6 +186,14 @@ class BeamInitial(Table):
                                        doc="initial nodal velocities, (n+1) rows (instead of velocity)")
 
 
+class AttachedMassSpec(Table):
+    """A point mass fixed to a material point of the beam (a clamp or spacer on a wire),
+    translation only: consistent added mass m Sᵀ S and its weight."""
+
+    s: float = key(unit="m", ge=0.0, allow_inf_nan=False, doc="reference arc length (0..L)")
+    mass: float = key(unit="kg", gt=0.0, allow_inf_nan=False, doc="m")
+
+
 class BeamSpec(Table):
     """An ANCF beam or cable (paper Eqs. 1–11)."""
 
@@ -203,6 +211,8 @@ class BeamSpec(Table):
     axial_law: Optional[Law] = key(None, doc="material law N(ε, ε̇) (default linear: N = EA ε)")
     bending_law: Optional[Law] = key(None, doc="material law M(κ, κ̇) (default linear: M = EI (κ − κ₀); "
                                                "others need curvature exact or material)")
+    masses: list[AttachedMassSpec] = key([], doc="point masses fixed to the beam (clamps), "
+                                                 "as [[beams.NAME.masses]] tables")
 
 
 # ----------------------------------------------------------------------------- bodies
@@ -266,9 +276,35 @@ class FixedSpec(Table):
     local: Optional[Vec2] = key(None, unit="m", doc="body point at `point` (default: where `point` starts)")
 
 
+class FrictionSpec(Table):
+    """Regularized Coulomb friction on a sliding joint: F = −μ N tanh(u/v_ε) − c u on the
+    body along the beam, N the joint's normal reaction, u the sliding speed (named
+    ``JOINT.friction``)."""
+
+    mu: float = key(unit="-", ge=0.0, allow_inf_nan=False, doc="friction coefficient μ")
+    regularization: float = key(1e-3, unit="m/s", gt=0.0, allow_inf_nan=False,
+                                doc="v_ε: a body held by friction creeps at v_ε artanh(F/(μN))")
+    viscous: float = key(0.0, unit="N·s/m", ge=0.0, allow_inf_nan=False, doc="c, a viscous part")
+
+
+class DriveSpec(Table):
+    """A drive of a sliding joint (named ``JOINT.drive``), exactly one of: ``position``
+    (the arc length s(t) is prescribed; the drive force is its reaction), ``force`` (a
+    tangential force on the body along +s, scaled by ``time_function``) or ``speed`` (a
+    velocity servo F = F_max tanh(k (u* − u)/F_max), with ``gain`` and ``max_force``)."""
+
+    position: Optional[TimeFunction] = key(None, unit="m", doc="s(t)")
+    force: Optional[float] = key(None, unit="N", allow_inf_nan=False, doc="tangential force F along +s")
+    time_function: Optional[TimeFunction] = key(None, doc="with force: scale f(t) (default 1)")
+    speed: Optional[TimeFunction] = key(None, unit="m/s", doc="servo: the sliding speed u*(t) along +s")
+    gain: Optional[float] = key(None, unit="N·s/m", gt=0.0, allow_inf_nan=False, doc="servo: gain k")
+    max_force: Optional[float] = key(None, unit="N", gt=0.0, allow_inf_nan=False, doc="servo: force limit F_max")
+
+
 class SlidingSpec(Table):
     """Sliding joint (paper §4, Eqs. 19–21): a body point stays on a beam's centre line
-    at the sliding coordinate s, without friction."""
+    at the sliding coordinate s; frictionless and free unless ``friction`` or ``drive``
+    is given."""
 
     type: Literal["sliding"] = key(doc="joint type")
     body: str = key(doc="body name")
@@ -280,6 +316,8 @@ class SlidingSpec(Table):
                                     "and the given velocities)")
     hold: bool = key(False, doc="false: held at s₀ only while the static equilibrium is found "
                                 "(initial.mode = static), free from t = 0; true: held for the whole run")
+    friction: Optional[FrictionSpec] = key(None, doc="Coulomb friction (default none)")
+    drive: Optional[DriveSpec] = key(None, doc="a drive (default none: free)")
 
 
 class CoordinateSpec(Table):
@@ -347,6 +385,10 @@ class SpringDamperSpec(Table):
     damping: float = key(0.0, unit="N·s/m", ge=0.0, allow_inf_nan=False, doc="c")
     rest_length: Optional[float] = key(None, unit="m", ge=0.0, allow_inf_nan=False,
                                        doc="ℓ₀ (default: the initial distance)")
+    acts: Literal["both", "tension", "compression"] = key(
+        "both", doc="both; tension: a rope, dropper or hanger (slack while ℓ < ℓ₀); compression: "
+                    "a stop or buffer (open while ℓ > ℓ₀). One-sided members damp only while engaged "
+                    "and never push (pull)")
 
 
 class MassProportionalSpec(Table):
@@ -549,8 +591,35 @@ class EnergyOutput(Table):
     component: Literal[COMPONENTS["energy"]] = key("total", unit="J", doc="which energy")
 
 
+class MemberOutput(Table):
+    """The force of a spring-damper (positive in tension) or its engaged state (1: taut
+    or closed, 0: slack or open)."""
+
+    type: Literal["member"] = key(doc="output type")
+    load: str = key(doc="spring-damper name (in [loads])")
+    component: Literal[COMPONENTS["member"]] = key("tension", unit="N, -", doc="force or state")
+
+
+class FrictionOutput(Table):
+    """The friction force of a sliding joint on its body along +s, or its normal reaction."""
+
+    type: Literal["friction"] = key(doc="output type")
+    joint: str = key(doc="sliding joint name (with friction)")
+    component: Literal[COMPONENTS["friction"]] = key("force", unit="N", doc="force or normal")
+
+
+class DriveOutput(Table):
+    """The drive force of a sliding joint on its body along +s."""
+
+    type: Literal["drive"] = key(doc="output type")
+    joint: str = key(doc="sliding joint name (with a drive)")
+    component: Literal[COMPONENTS["drive"]] = key("force", unit="N", doc="the force")
+
+
 Output = Annotated[Union[NodeOutput, PointOutput, BodyOutput, SlidingOutput, SlidingPointOutput,
-                         StressOutput, ReactionOutput, EnergyOutput], Field(discriminator="type")]
+                         StressOutput, ReactionOutput, EnergyOutput, MemberOutput, FrictionOutput,
+                         DriveOutput],
+                   Field(discriminator="type")]
 
 
 class OutputsSpec(Table):

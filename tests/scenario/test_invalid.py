@@ -140,6 +140,24 @@ CASES = [
     ("table with decreasing times", replaced(('"0.5 * sin(2*pi*t)"', '{ table = [[0.0, 0.0], [0.0, 1.0]] }')),
      "loads.push.time_function", "{ table = [[t, value], ...] }"),
     ("TOML syntax error", replaced(("elements = 4", "elements = ")), "line 8, column 12", "TOML 1.0 syntax"),
+    # cable machinery (issue 19)
+    ("negative friction coefficient", replaced(('beam = "arm"\ns = 0.5\n', 'beam = "arm"\ns = 0.5\nfriction = { mu = -0.1 }\n')),
+     "joints.slide.friction.mu", ">= 0"),
+    ("zero regularization", replaced(('beam = "arm"\ns = 0.5\n', 'beam = "arm"\ns = 0.5\nfriction = { mu = 0.1, regularization = 0.0 }\n')),
+     "joints.slide.friction.regularization", "> 0"),
+    ("drive with two modes", replaced(('beam = "arm"\ns = 0.5\n', 'beam = "arm"\ns = 0.5\ndrive = { position = "0.5 + t", force = 1.0 }\n')),
+     "joints.slide.drive", "exactly one of position, force, speed"),
+    ("servo without gain", replaced(('beam = "arm"\ns = 0.5\n', 'beam = "arm"\ns = 0.5\ndrive = { speed = 1.0, max_force = 10.0 }\n')),
+     "joints.slide.drive.gain", "a number > 0 with speed"),
+    ("drive position outside the safe set", replaced(('beam = "arm"\ns = 0.5\n', 'beam = "arm"\ns = 0.5\ndrive = { position = "t.real" }\n')),
+     "joints.slide.drive.position", "sin, cos"),
+    ("unknown spring action", added('[loads.rope]\ntype = "spring_damper"\na = { body = "cart" }\n'
+                                    'b = { ground = [0.0, 1.0] }\nstiffness = 1.0\nacts = "pull"\n'),
+     "loads.rope.acts", "both"),
+    ("clamp mass outside the beam", replaced(("alpha = 0.1\n", "alpha = 0.1\nmasses = [{ s = 2.0, mass = 0.1 }]\n")),
+     "beams.arm.masses[0].s", "0 .. 1 [m]"),
+    ("friction output without friction", added('[outputs.columns.f]\ntype = "friction"\njoint = "slide"\n'),
+     "outputs.columns.f.joint", "a sliding joint with a friction table"),
 ]
 
 

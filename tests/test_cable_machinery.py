@@ -1,0 +1,452 @@
+"""Cable machinery (issue 19): one-sided spring-dampers (ropes, droppers, stops),
+point masses on beams, driven and frictional sliding joints.
+
+Closed forms and independent numbers: a body bouncing on a tension-only rope (free
+flight while slack, harmonic while taut; scipy's solve_ivp as the independent answer),
+the energy balance through slack and taut phases with its tolerance from a step-halving
+study; a clamp mass's kinetic energy, weight and the frequency of a taut string with a
+central mass (z tan z = ρL/M, with a convergence study); a body on a frictional incline
+that creeps at v_ε artanh(F/μN) or slides at g (sin β − μ cos β); trolleys hauled at
+constant speed by a prescribed arc length, a servo and a pull against the closed-form
+resistance; the Newton matrix with ∂Q/∂λ against a dense jacfwd; gradients through
+friction and a drive against finite differences.
+
+Compiled programs are shared: the rope runs (h is data), the incline runs (tan β is
+data), one three-trolley run, one gradient program.
+"""
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
+
+from ancf_jax import dae, mesh
+from ancf_jax.beam import Beam
+from ancf_jax.forces import CompressionOnlySpringDamper, TensionOnlySpringDamper
+from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
+from ancf_jax.modal import modal_analysis
+from ancf_jax.model import Model, body_point, ground, node
+from ancf_jax.outputs import Output, evaluate
+from ancf_jax.points import BodyPoint, GroundPoint
+from ancf_jax.results import Results
+from ancf_jax.section import Section
+
+from .dynamics import G, run_fixed, track_model
+
+# ---------------------------------------------------------------------------- ropes
+K_ROPE, M_ROPE, L_ROPE, V_UP, T_ROPE = 400.0, 1.0, 1.0, 2.0, 1.6
+
+
+def rope_model(damping):
+    """A body hanging on a tension-only rope of rest length L from the origin, thrown
+    up at V_UP from where the rope is just taut (slack flight, then taut bounce)."""
+    m = Model(gravity=(0.0, -G))
+    m.add_body("b", mass=M_ROPE, inertia=0.1, position=(0.0, -L_ROPE), velocity=(0.0, V_UP),
+               angular_velocity=0.0)
+    m.spring_damper("rope", ground(0.0, 0.0), body_point("b"), stiffness=K_ROPE, damping=damping,
+                    rest_length=L_ROPE, acts="tension")
+    return m.build()
+
+
+@pytest.fixture(scope="module")
+def rope_runs():
+    """Undamped and damped rope at h = 2, 1, 0.5 ms (one compiled loop: h is data)."""
+    out = {}
+    for c in (0.0, 2.0):
+        system, state = rope_model(c)
+        for h in (0.002, 0.001, 0.0005):
+            out[c, h] = system, run_fixed(system, state, GeneralizedAlpha().forward_only(), h, T_ROPE, chunk=200)
+    return out
+
+
+def balance(run):
+    """max |T + V + U + D − W_e − W_c − (same at t = 0)| [J] (Results.energy's balance)."""
+    y = run.q[:, 1]
+    e = np.maximum(-y - L_ROPE, 0.0)
+    total = (0.5 * M_ROPE * np.sum(run.v[:, :2] ** 2, 1) + M_ROPE * G * y + 0.5 * K_ROPE * e**2
+             + run.work[:, 0] - run.work[:, 1] - run.work[:, 2])
+    return np.max(np.abs(total - total[0]))
+
+
+def rope_reference(damping, t):
+    """The vertical motion y(t) by solve_ivp (rtol 1e-11) with the same law: free flight
+    while y > −L, k e + max(c ė, −k e) while taut (e = −y − L)."""
+    def rhs(_, z):
+        y, vy = z
+        e = -y - L_ROPE
+        f = np.where(e > 0, K_ROPE * e + max(damping * -vy, -K_ROPE * e), 0.0) if e > 0 else 0.0
+        return [vy, -G + f / M_ROPE]
+    sol = solve_ivp(rhs, (0.0, t[-1]), [-L_ROPE, V_UP], t_eval=t, rtol=1e-11, atol=1e-12,
+                    method="DOP853", max_step=1e-3)
+    return sol.y[0]
+
+
+def test_one_sided_laws_zero_on_the_other_side():
+    """Tension only: no force while shorter than ℓ₀, k e while longer; a fast retraction
+    of a taut rope is limited to zero force (the damper never pushes). Compression only:
+    the mirror image. Exact zeros."""
+    k, c, l0 = 100.0, 50.0, 1.0
+    system, _ = rope_model(0.0)
+
+    @eqx.filter_jit
+    def evaluate(f, q, v):
+        return f.tension(system, q, v), f.generalized_force(system, q, v, 0.0)[1]
+    for law, sign in ((TensionOnlySpringDamper, 1.0), (CompressionOnlySpringDamper, -1.0)):
+        f = law("m", GroundPoint(jnp.zeros(2)), BodyPoint(0, jnp.zeros(2)), jnp.asarray(k),
+                jnp.asarray(c), jnp.asarray(l0))
+        for ell, ell_dot, expected in ((1.0 - sign * 0.1, 0.0, 0.0), (1.0 - sign * 0.1, sign * 3.0, 0.0),
+                                       (1.0 + sign * 0.1, 0.0, sign * k * 0.1),
+                                       (1.0 + sign * 0.1, sign * 0.05, sign * (k * 0.1 + c * 0.05)),
+                                       (1.0 + sign * 0.1, -sign * 3.0, 0.0)):
+            q = jnp.array([0.0, -ell, 0.0])
+            v = jnp.array([0.0, -ell_dot, 0.0])
+            tension, q_y = evaluate(f, q, v)
+            assert float(tension) == pytest.approx(expected, abs=1e-12)
+            # the generalized force on y of the body below the anchor is the member force
+            assert float(q_y) == pytest.approx(expected, abs=1e-12)
+
+
+def test_rope_slack_and_taut_phases(rope_runs):
+    """Slack phase: free flight (the rope does nothing: y = −L + V t − ½ g t² to
+    round-off... the generalized-α error); taut: the maximum stretch of the undamped rope
+    mg/k + √((mg/k)² + V²/ω²); the damped run against solve_ivp."""
+    system, run = rope_runs[0.0, 0.0005]
+    y = run.q[:, 1]
+    slack = run.t < 2 * V_UP / G - 0.01
+    np.testing.assert_allclose(y[slack], -L_ROPE + V_UP * run.t[slack] - 0.5 * G * run.t[slack] ** 2,
+                               atol=1e-9)
+    w = np.sqrt(K_ROPE / M_ROPE)
+    e_max = M_ROPE * G / K_ROPE + np.sqrt((M_ROPE * G / K_ROPE) ** 2 + V_UP**2 / w**2)
+    # measured error 2.1e-5, 1.1e-5, 5.8e-6, 1.9e-6 m at h = 4, 2, 1, 0.5 ms
+    assert np.max(-y - L_ROPE) == pytest.approx(e_max, abs=5e-6)
+    for c in (0.0, 2.0):
+        _, run = rope_runs[c, 0.0005]
+        ref = rope_reference(c, run.t)
+        assert np.max(np.abs(run.q[:, 1] - ref)) < 2e-4
+
+
+def test_rope_energy_balance_step_halving(rope_runs):
+    """The energy balance through two slack/taut transitions closes to the integrator's
+    error: step-halving study (measured, undamped: 2.6e-3, 6.0e-4, 3.1e-4, 5.1e-5 J at
+    h = 4, 2, 1, 0.5 ms; damped c = 2 N·s/m: 1.4e-3, 4.3e-4, 1.6e-4, 5.8e-5 J, with 1.55 J
+    dissipated; initial energy 2 J). Tolerance: 2× the measured error at each step, and
+    the error must fall with the step."""
+    measured = {(0.0, 0.002): 6.0e-4, (0.0, 0.001): 3.1e-4, (0.0, 0.0005): 5.1e-5,
+                (2.0, 0.002): 4.3e-4, (2.0, 0.001): 1.6e-4, (2.0, 0.0005): 5.8e-5}
+    for c in (0.0, 2.0):
+        errs = [balance(rope_runs[c, h][1]) for h in (0.002, 0.001, 0.0005)]
+        for h, e in zip((0.002, 0.001, 0.0005), errs):
+            assert e < 2.0 * measured[c, h], (c, h, e)
+        assert errs[2] < errs[1] < errs[0]
+    d = rope_runs[2.0, 0.0005][1].work[-1, 0]
+    assert 1.4 < d < 1.7   # dissipated while taut only
+    assert rope_runs[0.0, 0.0005][1].work[-1, 0] == 0.0
+
+
+# ---------------------------------------------------------------------------- point masses
+L_WIRE, STRETCH, RHOA_WIRE, EA_WIRE, M_CLAMP = 2.0, 1.001, 0.5, 1e6, 0.4
+
+
+def wire_model(n, *, s_clamp=L_WIRE / 2, gravity=(0.0, 0.0)):
+    """A taut wire, stress-free length L, stretched by STRETCH between two pins, with a
+    clamp of mass M at reference arc length s_clamp; EI negligible (1e-9 N·m²). All
+    meshes padded to 32 elements: one compiled program."""
+    m = Model(gravity=gravity)
+    track = mesh.straight((0.0, 0.0), (1.0, 0.0), L_WIRE, n)
+    nodes = np.asarray(track.reference_nodes)[: n + 1].copy()
+    nodes[:, [0, 2]] *= STRETCH
+    m.add_beam("w", track, Section(EA_WIRE, 1.0, 1e-9, RHOA_WIRE), initial_nodes=nodes)
+    m.pin("a", node("w", 0))
+    m.pin("b", node("w", -1))
+    m.attached_mass("clamp", "w", s_clamp, M_CLAMP)
+    return m.build(pad_to=32, assemble=False)  # consistent as built: pins where the nodes are
+
+
+def test_attached_mass_inertia_and_weight():
+    """The beam's mass matrix gains exactly ½ m |ṙ(s)|² of kinetic energy (random
+    velocities; the clamp inside an element), the total mass ρA L + m appears in the
+    rigid translation, the gravity load sums to (ρA L + m) g, at its centre of mass."""
+    system, state = wire_model(5, s_clamp=0.77, gravity=(0.0, -G))
+    beam = system.beams[0]
+    rng = np.random.default_rng(0)
+    v = jnp.asarray(rng.normal(size=system.n_coordinates))
+    bare = eqx.tree_at(lambda s: s.beams, system, (Beam(beam.mesh, beam.section),))
+    ux = jnp.zeros(system.n_coordinates).at[system.beam_offset(0) + 4 * jnp.arange(6)].set(1.0)
+
+    @eqx.filter_jit
+    def quantities(system, bare, v):
+        r_dot = system.beams[0].position(system.beam_nodes(v, 0), 0.77)  # ṙ(s) = S(x) ė
+        return (system.kinetic_energy(v) - bare.kinetic_energy(v), jnp.dot(r_dot, r_dot),
+                ux @ system.mass_times(ux), system.gravity_load(), system.beams[0].total_mass)
+
+    extra, r_dot2, m_x, load, total_mass = quantities(system, bare, v)
+    assert float(extra) == pytest.approx(0.5 * M_CLAMP * float(r_dot2), rel=1e-12)
+    total = RHOA_WIRE * L_WIRE + M_CLAMP
+    assert float(total_mass) == pytest.approx(total, rel=1e-14)
+    assert float(m_x) == pytest.approx(total, rel=1e-12)
+    f = np.asarray(load)[system.beam_offset(0):][: 4 * 6].reshape(6, 4)
+    assert f[:, 1].sum() == pytest.approx(-G * total, rel=1e-12)
+    # moment of the load about the origin: the centre of mass (ρA L·L/2 + m s)/total
+    x_ref = np.asarray(beam.mesh.reference_nodes)[:6]
+    moment = np.sum(x_ref[:, 0] * f[:, 1] + x_ref[:, 2] * f[:, 3])
+    assert moment == pytest.approx(-G * (RHOA_WIRE * L_WIRE**2 / 2 + M_CLAMP * 0.77), rel=1e-12)
+
+
+def test_taut_string_with_central_mass_frequency():
+    """The lowest mode of a taut string (tension T, line density ρ, length L) with a
+    central mass M: ω = 2 z c / L with z tan z = ρ L / M, c = √(T/ρ). The cubic Hermite
+    elements are C¹ and cannot represent the string's kink under the mass, so the error
+    is first order in the element size (measured 1.12e-2, 5.44e-3, 2.71e-3, 1.36e-3 at
+    4, 8, 16, 32 elements, mass at a node; ratio 2.0); its Richardson extrapolation
+    2 ω(32) − ω(16) agrees with the closed form to 6e-6 (asserted 2e-5). A clamp inside
+    an element (odd meshes) converges alike."""
+    errors = {}
+    for n in (8, 16, 32, 9):
+        system, state = wire_model(n)
+        res = modal_analysis(system, state.q, n_modes=1)
+        errors[n] = res.angular_frequencies[0]
+    length = L_WIRE * STRETCH
+    tension = EA_WIRE * 0.5 * (STRETCH**2 - 1.0) * STRETCH  # Green-Lagrange: EA ε |r'|
+    rho = RHOA_WIRE / STRETCH
+    z = brentq(lambda z: z * np.tan(z) - rho * length / M_CLAMP, 1e-9, np.pi / 2 - 1e-12)
+    omega = 2.0 * z / length * np.sqrt(tension / rho)
+    rel = {n: w / omega - 1.0 for n, w in errors.items()}
+    assert 0.0 < rel[32] < rel[16] < rel[8] < 6e-3
+    assert rel[16] / rel[32] == pytest.approx(2.0, abs=0.05)
+    assert abs((2.0 * errors[32] - errors[16]) / omega - 1.0) < 2e-5
+    assert 0.0 < rel[9] < 5e-3
+
+
+# ---------------------------------------------------------------------------- friction, drives
+MU = 0.3
+V_EPS = 1e-3  # the default regularization speed
+S_START = 0.5
+
+
+def incline_model(tan_beta, *, s0=S_START):
+    """A body (1 kg) on a straight rigid incline (4 elements, every node clamped) of
+    slope angle β, friction μ on its sliding joint "slider" (default v_ε)."""
+    beta = np.arctan(tan_beta)
+    track = mesh.straight((0.0, 0.0), (np.cos(beta), -np.sin(beta)), 2.0, 4)  # +s: downhill
+    m = track_model(track, s0)
+    m.slider_friction("friction", "slider", mu=MU)
+    return m, beta
+
+
+def total_energy(system, run):
+    """T + V + U + D − W_e − W_c per row [J] (Results.energy's total)."""
+    @eqx.filter_jit
+    def mech(system, q, v):
+        return jax.vmap(lambda qq, vv: system.kinetic_energy(vv) + system.potential_energy(qq))(q, v)
+    return np.asarray(mech(system, run.q, run.v)) + run.work[:, 0] - run.work[:, 1] - run.work[:, 2]
+
+
+@pytest.fixture(scope="module")
+def incline_runs():
+    """tan β = 0.5 μ (sticks) and 2 μ (slides) at h = 1 ms over 0.4 s (one program)."""
+    out = {}
+    for ratio in (0.5, 2.0):
+        m, beta = incline_model(ratio * MU)
+        system, state = m.build()
+        out[ratio] = system, beta, run_fixed(system, state, GeneralizedAlpha().forward_only(), 0.001, 0.4, chunk=100)
+    return out
+
+
+def test_friction_sticks_below_the_limit(incline_runs):
+    """tan β = μ/2: the regularized friction holds the body, which creeps at the
+    stated speed v_ε artanh(tan β / μ) = 0.549 v_ε (steady state of F = μN tanh(u/v_ε);
+    measured to 1e-10 relative after 0.1 s), far below any visible motion; the friction force is the
+    slope component m g sin β, the normal reaction m g cos β."""
+    system, beta, run = incline_runs[0.5]
+    assert run.status == 0
+    u = run.v[:, system.sliding_offset]
+    creep = V_EPS * np.arctanh(np.tan(beta) / MU)
+    late = run.t > 0.1
+    np.testing.assert_allclose(u[late], creep, rtol=1e-8)
+    # the first steps overshoot (h = 1 ms is 3 relaxation times v_ε/(μ g cos β) of the
+    # regularized law; generalized-α, ρ∞ = 0.9, rings it down): measured 1.16× at 1 ms
+    assert np.max(u) < 1.2 * creep
+    lam = run.lam[:, system.constraint_offset(len(system.constraints) - 1):][:, :2]
+    t_hat = np.array([np.cos(beta), -np.sin(beta)])
+    n_hat = np.array([np.sin(beta), np.cos(beta)])
+    np.testing.assert_allclose((lam @ t_hat)[late], -G * np.sin(beta), rtol=1e-8)  # friction up the slope
+    np.testing.assert_allclose((lam @ n_hat)[late], G * np.cos(beta), rtol=1e-8)
+
+
+def test_friction_slides_above_the_limit(incline_runs):
+    """tan β = 2μ: the body accelerates at g (sin β − μ cos β) (from ṡ between 0.2 and
+    0.4 s; measured 5e-13 relative); the energy balance with the friction dissipation
+    closes to 3e-6 J (0.51 J dissipated; measured 2.4e-6 J at h = 1 ms, 9.7e-6 J at
+    2 ms: second order)."""
+    system, beta, run = incline_runs[2.0]
+    u = run.v[:, system.sliding_offset]
+    i, j = np.searchsorted(run.t, 0.2), len(run.t) - 1
+    a = (u[j] - u[i]) / (run.t[j] - run.t[i])
+    assert a == pytest.approx(G * (np.sin(beta) - MU * np.cos(beta)), rel=1e-9)
+    total = total_energy(system, run)
+    assert np.max(np.abs(total - total[0])) < 3e-6
+    assert run.work[-1, 0] == pytest.approx(0.5108, abs=2e-3)
+
+
+U_DRIVE, F_PULL, T_DRIVE = 0.5, 10.0, 0.3
+SERVO_GAIN, SERVO_MAX = 2000.0, 50.0
+
+
+@pytest.fixture(scope="module")
+def driven_run():
+    """Three trolleys (1 kg) with friction μ on one rigid incline, tan β = 0.15, hauled
+    uphill: "a" by a prescribed arc length s = 1.5 − U t, "b" by a velocity servo to
+    −U (gain 2000 N·s/m, limit 50 N) from ṡ = −U, "c" by a constant pull of 10 N from
+    rest. One run, h = 1 ms, 0.3 s."""
+    beta = np.arctan(0.15)
+    track = mesh.straight((0.0, 0.0), (np.cos(beta), -np.sin(beta)), 2.0, 2)
+    m = Model(gravity=(0.0, -G))
+    m.add_beam("track", track, Section(2.1e11, 1e-4, 1e-9, 0.785))
+    for i in range(3):
+        m.clamp(f"clamp{i}", "track", i)
+    t_hat = np.array([np.cos(beta), -np.sin(beta)])
+    for name, s0, rate in (("a", 1.5, -U_DRIVE), ("b", 1.0, -U_DRIVE), ("c", 0.5, 0.0)):
+        m.add_body(name, mass=1.0, inertia=0.1, position=s0 * t_hat, velocity=rate * t_hat)
+        m.slider(f"s{name}", name, "track", s0, rate=rate)
+        m.slider_friction(f"friction_{name}", f"s{name}", mu=MU)
+    m.slider_drive("drive_a", "sa", position=lambda t: 1.5 - U_DRIVE * t)
+    m.slider_drive("drive_b", "sb", speed=-U_DRIVE, gain=SERVO_GAIN, max_force=SERVO_MAX)
+    m.slider_drive("drive_c", "sc", force=-F_PULL)
+    system, state = m.build()
+    run = run_fixed(system, state, GeneralizedAlpha().forward_only(), 0.001, T_DRIVE, chunk=100)
+    results = Results(system, run.t, run.q, run.v, run.acc, run.lam, run.work, np.zeros(len(run.t)))
+    return system, beta, run, results
+
+
+def test_driven_trolleys_closed_form_resistance(driven_run):
+    """At constant speed uphill the drive force equals the closed-form resistance
+    −m g (sin β + μ cos β) (tanh(U/v_ε) = 1 to 1e-200): prescribed s(t) (its reaction)
+    to 1e-9 relative; the servo's to 1e-9 relative at the speed error
+    (F_max/k) artanh(F/F_max) it needs; the pulled trolley accelerates at
+    −F/m + g (sin β + μ cos β). The friction output is μ m g cos β, the energy balance
+    (drive work as constraint and external work, friction dissipation) closes to
+    4e-6 of the work done (the pulled trolley's start from rest is the transient)."""
+    system, beta, run, results = driven_run
+    resistance = G * (np.sin(beta) + MU * np.cos(beta))
+    late = run.t > 0.1
+    cols = evaluate(results, [Output("fa", "drive", "drive_a"), Output("fb", "drive", "drive_b"),
+                              Output("fc", "drive", "drive_c"), Output("na", "friction", "friction_a", "normal"),
+                              Output("ra", "friction", "friction_a", "force")])
+    np.testing.assert_allclose(cols["fa"][late], -resistance, rtol=1e-8)  # measured 2.6e-9 (Newton tolerance)
+    np.testing.assert_allclose(cols["fb"][late], -resistance, rtol=1e-9)  # measured 2.8e-10
+    np.testing.assert_allclose(cols["fc"], -F_PULL, rtol=1e-14)
+    np.testing.assert_allclose(cols["na"], G * np.cos(beta), rtol=1e-9)
+    np.testing.assert_allclose(cols["ra"][late], MU * G * np.cos(beta), rtol=1e-9)
+    o = system.sliding_offset
+    np.testing.assert_allclose(run.q[:, o], 1.5 - U_DRIVE * run.t, atol=1e-12)
+    error = SERVO_MAX / SERVO_GAIN * np.arctanh(resistance / SERVO_MAX)
+    np.testing.assert_allclose(run.v[late, o + 1], -U_DRIVE + error, rtol=1e-9)
+    u_c = run.v[:, o + 2]
+    i, j = np.searchsorted(run.t, 0.1), len(run.t) - 1
+    assert (u_c[j] - u_c[i]) / (run.t[j] - run.t[i]) == pytest.approx(-F_PULL + resistance, rel=1e-9)
+    total = total_energy(system, run)
+    assert np.max(np.abs(total - total[0])) < 3e-5  # measured 1.3e-5 J of 3.2 J + 0.65 J work
+    assert run.work[-1, 1] > 0.0 and run.work[-1, 2] > 0.0  # servo, pull; hauling a
+
+
+def test_newton_matrix_holds_the_friction_linearization(incline_runs):
+    """The Newton matrix (:func:`ancf_jax.dae.iteration_matrix`) is the Jacobian of the
+    generalized-α residual with friction, ∂Q_r/∂λ included (a dense ``jax.jacfwd`` of
+    the residual in (Δq, λ) as the independent reference), at a creeping state of the
+    sticking run (u ≈ 0.55 v_ε: tanh is far from its saturation) with a perturbed λ."""
+    system, _, run = incline_runs[0.5]
+    k = len(run.t) // 2
+    q, v = jnp.asarray(run.q[k]), jnp.asarray(run.v[k])
+    lam = jnp.asarray(run.lam[k]) * 1.1
+    t, beta_p, gamma_p = float(run.t[k]), 3.7e5, 1.1e3
+    n = system.n_coordinates
+
+    @eqx.filter_jit
+    def both(system, q, v, lam):
+        def residual(x):
+            dq, lm = x[:n], x[n:]
+            q1, v1 = q + dq, v + gamma_p * dq
+            phi, vjp = jax.vjp(lambda qq: system.constraint(qq, t), q1)
+            r = (system.mass_times(beta_p * dq) - system.generalized_force(q1, v1, t)
+                 - system.reaction_force(q1, v1, t, lm) + vjp(lm)[0])
+            return dae.to_solver_order(system, r, phi)
+        perm = np.concatenate([dae.solver_permutation(system), n + np.arange(lam.shape[0])])
+        reference = jax.jacfwd(residual)(jnp.concatenate([jnp.zeros(n), lam]))[:, perm]
+        jac = system.constraint_jacobian(q, t)
+        return dae.iteration_matrix(system, q, v, lam, t, beta_p, gamma_p, jac).effective_dense(), reference
+
+    structured, reference = both(system, q, v, lam)
+    scale = jnp.max(jnp.abs(reference))
+    np.testing.assert_allclose(structured / scale, reference / scale, rtol=0, atol=1e-13)
+    # the friction's λ-columns are really there: the sliding row holds r'(s) (= t̂, the
+    # frictionless Φ_qᵀ entry) plus −∂(|r'| F)/∂λ = μ tanh(u/v_ε) ∂N/∂λ (0.3 · 0.5 n̂)
+    o = system.sliding_offset
+    row = list(np.asarray(dae.solver_permutation(system))).index(o)
+    cols = n + system.constraint_offset(system.reaction_forces[0].joint) + np.arange(2)
+    r1 = np.asarray(system.beams[0].slope(system.beam_nodes(q, 0), q[o]))
+    assert np.linalg.norm(np.asarray(reference)[row, cols] - r1) > 0.1
+
+
+def test_gradients_through_friction_and_drive():
+    """d s(T)/d(μ, F) of a trolley pulled by a drive force F on a frictional incline
+    (tan β = 2μ, from rest: through the regularization transient), forward mode through
+    the implicit generalized-α steps, against central finite differences (step 1e-6;
+    measured agreement 1e-8 relative)."""
+    from ancf_jax.simulation import trajectory
+
+    beta = np.arctan(2 * MU)
+    track = mesh.straight((0.0, 0.0), (np.cos(beta), -np.sin(beta)), 2.0, 2)
+    m = track_model(track, 0.5, clamp_nodes="all")
+    m.slider_friction("friction", "slider", mu=MU)
+    m.slider_drive("pull", "slider", force=-1.0)
+    system, state = m.build()
+
+    @jax.jit
+    def final_s(p):
+        sys = eqx.tree_at(lambda s: (s.reaction_forces[0].mu, s.forces[0].force), system, (p[0], p[1]))
+        seg, _ = trajectory(sys, state, GeneralizedAlpha(), t_end=0.05, dt=0.001)
+        return seg.q[-1, sys.sliding_offset]
+
+    p0 = jnp.array([MU, -1.0])
+    grad = np.asarray(jax.jacfwd(final_s)(p0))
+    fd = np.array([(final_s(p0 + d) - final_s(p0 - d)) / 2e-6 for d in 1e-6 * jnp.eye(2)])
+    np.testing.assert_allclose(grad, fd, rtol=1e-6)
+    # the closed form of the saturated motion, ½ T² (−N, 1/m), up to the transient
+    assert grad[0] == pytest.approx(-0.5 * 0.05**2 * G * np.cos(beta), rel=0.05)
+    assert grad[1] == pytest.approx(0.5 * 0.05**2, rel=0.05)
+
+
+def test_bad_machinery_input_is_refused_before_compiling():
+    """One-line errors naming the parameter, raised by the Model before any JAX work."""
+    from ancf_jax.errors import ModelError
+
+    def base():
+        m = Model()
+        m.add_beam("w", mesh.straight((0.0, 0.0), (1.0, 0.0), 1.0, 2), Section(1e9, 1e-4, 1e-9, 0.1))
+        m.add_body("b", mass=1.0, inertia=0.1, position=(0.5, 0.0))
+        m.slider("sl", "b", "w", 0.5)
+        return m
+
+    cases = [
+        (lambda m: m.slider_drive("d", "sl"), "exactly one of position, force, speed, got none"),
+        (lambda m: m.slider_drive("d", "sl", force=1.0, speed=1.0), "exactly one of position, force, speed"),
+        (lambda m: m.slider_drive("d", "sl", speed=1.0, max_force=1.0), "gain of drive 'd'"),
+        (lambda m: m.slider_drive("d", "sl", speed=1.0, gain=1.0, max_force=-1.0), "max_force of drive 'd'"),
+        (lambda m: m.slider_friction("f", "sl", mu=-0.1), "mu of friction 'f'"),
+        (lambda m: m.slider_friction("f", "sl", mu=0.1, regularization=0.0), "regularization of friction 'f'"),
+        (lambda m: m.spring_damper("r", ground(0.0, 0.0), body_point("b"), stiffness=1.0, acts="pull"),
+         "acts of spring-damper 'r'"),
+        (lambda m: m.attached_mass("c", "w", 0.5, 0.0), "mass of attached mass 'c'"),
+    ]
+    for add, fragment in cases:
+        with pytest.raises(ModelError, match=fragment):
+            add(base())
+    for add, fragment in [(lambda m: m.slider_friction("f", "nope", mu=0.1), "sliding joint 'nope'"),
+                          (lambda m: m.attached_mass("c", "w", 1.5, 0.1), "outside beam 'w'")]:
+        m = base()
+        add(m)
+        with pytest.raises(ModelError, match=fragment):
+            m.build()
