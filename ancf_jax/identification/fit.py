@@ -348,7 +348,7 @@ def fit(problem: Problem, data: Measurements, init: dict | Sequence[float] | Non
         max_iterations: int | None = None, xtol: float = 1e-8, ftol: float = 1e-10, gtol: float = 1e-10,
         learning_rate: float = 0.05, optimizer=None, progress=False, noise: Optional[float] = None,
         discretization: bool = False, refine: bool = True, refine_budget: int = 2,
-        shift_limit: float = 0.3) -> FitResult:
+        shift_limit: float = 0.3, refine_axes: Sequence[str] = ("step", "mesh")) -> FitResult:
     """Fit the problem's parameters to one data set.
 
     Args:
@@ -375,6 +375,8 @@ def fit(problem: Problem, data: Measurements, init: dict | Sequence[float] | Non
             on by default in ``ancf-jax fit``.
         refine: with ``discretization``, refine and fit again while an estimate moves by
             more than ``shift_limit`` standard errors, at most ``refine_budget`` times.
+        refine_axes: which refinements the check makes: ``"step"`` (h/2) and/or
+            ``"mesh"`` (elements × 2; problems built from a scenario with one beam).
 
     Returns:
         :class:`~.report.FitResult`.
@@ -390,7 +392,7 @@ def fit(problem: Problem, data: Measurements, init: dict | Sequence[float] | Non
         return one(problem, data, init, **options)
     from .discretization import controlled_fit
     result, _ = controlled_fit(one, problem, data, init, refine=refine, budget=refine_budget,
-                               limit=shift_limit, **options)
+                               limit=shift_limit, axes=tuple(refine_axes), **options)
     return result
 
 

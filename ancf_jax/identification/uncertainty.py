@@ -35,6 +35,11 @@ def bootstrap(problem: Problem, result, members: int = 20, *, seed: int = 0, noi
     members, seed, sigma, estimates {name: [B values]}, mean, std, q025, q975,
     gn_stderr (the fit's), std_over_stderr, coverage_2se, converged (count)."""
     from .fit import fit_batch
+    if result.dt is not None and problem.dt / result.dt > 1.5 or (
+            result.elements is not None and problem.elements is not None and result.elements != problem.elements):
+        # the fit refined the discretization (fit(..., discretization=True)): bootstrap on the final one
+        problem = problem.refined(step=int(round(problem.dt / result.dt)),
+                                  mesh=int(round(result.elements / problem.elements)) if result.elements else 1)
     if int(members) < 2:
         raise ModelError(f"bootstrap members must be >= 2, got {members}")
     data = result.data
