@@ -166,3 +166,26 @@ def test_bootstrap_spread_agrees_with_gauss_newton(problem, record):
         assert 0.6 < bs["std_over_stderr"][name] < 1.5, (name, bs["std_over_stderr"])
         assert bs["coverage_2se"][name] >= 13 / 16
     assert "bootstrap (16 members)" in res.summary() and res.to_dict()["bootstrap"]["members"] == 16
+
+
+# ---------------------------------------------------------------------------- CLI
+def test_cli_fit_with_nuisance_and_noise(problem, record, tmp_path, capsys):
+    """``ancf-jax fit --nuisance ... --noise ...`` on the record written as CSV: the same
+    problem and sample count as the fixtures, so no new compilation."""
+    from ancf_jax.cli import main
+    from ancf_jax.identification import write_csv
+    path = tmp_path / "record.csv"
+    write_csv(path, record.t, record.y, precision=17)
+    out = tmp_path / "fit"
+    assert main(["fit", "m1", "--elements", str(ELEMENTS), "--t-end", str(T_END), "--dt", str(DT),
+                 "--data", str(path), "--params", "alpha", "--init", "alpha=0.01,beta=0",
+                 "--nuisance", "time_offset,offset,gain", "--noise", str(SIGMA), "--no-refine",
+                 "--no-figures", "--no-progress", "--out", str(out)]) == 0
+    report = json.loads((out / "fit.json").read_text())
+    assert report["nuisance"] == list(NUISANCE) and report["discretization"] is None
+    assert abs(report["time_offset"] - TAU) <= 3 * report["time_offset_stderr"]
+    assert report["diagnostics"]["white"]
+    assert "(nuisance)" in capsys.readouterr().out
+    assert main(["fit", "m1", "--data", str(path), "--nuisance", "delay"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "unknown nuisance parameter 'delay'" in err

@@ -112,6 +112,19 @@ def check_output(system: System, output: Output) -> None:
                          f"depend on the positions only ({', '.join(FITTABLE_KINDS)})")
 
 
+def check_nuisance(nuisance) -> tuple:
+    """Nuisance parameter names (a sequence or ``"a,b"``) in :data:`NUISANCE` order;
+    ModelError for an unknown or repeated name."""
+    if isinstance(nuisance, str):
+        nuisance = [n.strip() for n in nuisance.split(",") if n.strip()]
+    bad = [n for n in nuisance if n not in NUISANCE]
+    if bad:
+        raise ModelError(f"unknown nuisance parameter {bad[0]!r}; known: {', '.join(NUISANCE)}")
+    if len(set(nuisance)) != len(nuisance):
+        raise ModelError("nuisance: a parameter is given twice")
+    return tuple(n for n in NUISANCE if n in nuisance)
+
+
 # ---------------------------------------------------------------------------- problem
 @dataclasses.dataclass(frozen=True)
 class Layout:
@@ -280,15 +293,8 @@ class Problem:
         from ..validation import check_positive
         self.system, self.state = system, state
         self.params = P.resolve(system, params)
-        if isinstance(nuisance, str):
-            nuisance = [n.strip() for n in nuisance.split(",") if n.strip()]
-        bad = [n for n in nuisance if n not in NUISANCE]
-        if bad:
-            raise ModelError(f"unknown nuisance parameter {bad[0]!r}; known: {', '.join(NUISANCE)}")
-        if len(set(nuisance)) != len(nuisance):
-            raise ModelError("nuisance: a parameter is given twice")
         #: the nuisance parameters of the measurement (:func:`measured`), in NUISANCE order
-        self.nuisance = tuple(n for n in NUISANCE if n in nuisance)
+        self.nuisance = check_nuisance(nuisance)
         self.max_time_offset = check_positive("max_time_offset", max_time_offset, "s")
         #: how the problem was built from a scenario (for :meth:`refined`); None otherwise
         self.recipe = None
@@ -334,6 +340,7 @@ class Problem:
                 this much past the last sample.
         """
         from ..scenario import load_scenario
+        check_nuisance(nuisance)  # before anything is built
         extra = list(overrides)
         if dt is not None:
             from ..validation import check_positive
