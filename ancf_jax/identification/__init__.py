@@ -26,7 +26,7 @@ from .parameters import Parameter
 from .problem import NUISANCE, Problem
 from .report import FitResult, ljung_box, misfit_diagnostics
 from .synthetic import synthesize
-from .uncertainty import bootstrap
+from .uncertainty import bootstrap, profile
 
 __all__ = ["DataError", "Measurements", "read_csv", "write_csv", "Parameter", "Problem", "NUISANCE", "fit",
-           "fit_batch", "FitResult", "synthesize", "bootstrap", "ljung_box", "misfit_diagnostics"]
+           "fit_batch", "FitResult", "synthesize", "bootstrap", "profile", "ljung_box", "misfit_diagnostics"]

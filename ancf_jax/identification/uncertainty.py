@@ -1,4 +1,5 @@
-"""Uncertainty beyond Gauss–Newton: a parametric bootstrap as one vmapped batch.
+"""Uncertainty beyond Gauss–Newton: a parametric bootstrap as one vmapped batch, and
+the profile likelihood of one parameter (:func:`profile`).
 
 The Gauss–Newton standard errors (:func:`~.report.gauss_newton_statistics`) linearise
 the model at the estimate and assume white noise of the size of the residual RMS. Near
@@ -76,3 +77,47 @@ def bootstrap(problem: Problem, result, members: int = 20, *, seed: int = 0, noi
                converged=int(sum(f.converged for f in fits)))
     result.bootstrap = out
     return out
+
+
+def profile(problem: Problem, result, name: str, steps=(-1.5, 1.5), *,
+            max_iterations: Optional[int] = None) -> dict:
+    """Profile likelihood of one free parameter: at p_k = p̂_k + s·SE_k for each s in
+    ``steps`` the other free parameters are fitted again with p_k held (the same
+    compiled program: only the set of free parameters changes), and
+
+        Δ(p_k) = (loss(p_k) − loss(p̂)) / s²,      s² = loss(p̂) / (N − n)
+
+    (Gaussian noise: Δ is the χ²(1) likelihood-ratio statistic; for a model linear in
+    p, Δ = (p_k − p̂_k)² / SE_k² exactly). Returned per point: the value, Δ and the
+    profile standard error |p_k − p̂_k| / sqrt(Δ), which equals the Gauss–Newton SE
+    where the linearisation holds
+    (the result is not changed)."""
+    from .fit import fit
+    if name not in result.free:
+        raise ModelError(f"profile: {name!r} is not a free parameter of the fit ({', '.join(result.free)})")
+    k = result.names.index(name)
+    se = float(result.stderr[k])
+    if not np.isfinite(se) or se <= 0:
+        raise ModelError(f"profile: {name} has no finite standard error")
+    others = tuple(n for n in result.free if n != name)
+    n, nfree = result.n_samples, len(result.free)
+    loss0 = result.residual_rms ** 2
+    s2 = loss0 / max(1, n - nfree)  # Gauss–Newton's s² for the normalised residuals (Σ r² = loss)
+    points = []
+    for s in steps:
+        value = float(result.estimates[k] + s * se)
+        if k < problem.n_physical and value <= 0:
+            continue
+        start = {m: float(v) for m, v in zip(result.names, result.estimates)}
+        start[name] = value
+        if others:
+            r = fit(problem, result.data, start, free=others, max_iterations=max_iterations)
+            loss = r.residual_rms ** 2
+        else:
+            rr, *_ = problem.evaluate(problem.vector(start), [result.data])
+            loss = float(rr[0] @ rr[0])
+        delta = (loss - loss0) / s2
+        points.append(dict(step_se=float(s), value=value, delta=float(delta),
+                           profile_stderr=float(abs(value - result.estimates[k]) / np.sqrt(delta))
+                           if delta > 0 else float("inf")))
+    return dict(name=name, estimate=float(result.estimates[k]), gn_stderr=se, points=points)
