@@ -18,7 +18,9 @@ import pytest
 from scipy.stats import chi2
 
 from ancf_jax.errors import ModelError
-from ancf_jax.identification import Measurements, Problem, fit, ljung_box, misfit_diagnostics, profile, synthesize
+from ancf_jax.identification import (Measurements, Problem, fit, fit_joint, ljung_box, misfit_diagnostics, profile,
+                                    synthesize)
+from ancf_jax.identification.report import gauss_newton_statistics
 from ancf_jax.identification.report import DETERMINED, FIXED
 
 ELEMENTS, T_END, DT, RATE = 3, 1.0, 2e-3, 500.0
@@ -206,6 +208,30 @@ def test_discretization_check_catches_step_bias_and_refinement_removes_it(plain)
     d = res.to_dict()
     assert d["discretization"]["final_dt"] == 1e-3 and d["dt"] == 1e-3
     json.dumps(d)
+
+
+# ---------------------------------------------------------------------------- joint
+def test_joint_fit_of_two_experiments(plain):
+    """Two experiments — M1 released under gravity 9.81 and 5 m/s² (another load; same
+    shapes: one compiled program) — fitted with one α. Reference: Gauss–Newton information adds
+    over independent records, so the joint standard error is 1/sqrt(Σ 1/SE_e²) with
+    SE_e each record's own standard error at the same α."""
+    heavy = Problem.from_scenario("m1", ("alpha", "beta"), elements=ELEMENTS, t_end=T_END, dt=DT,
+                                  overrides=["gravity=[0.0, -5.0]"])
+    sigma = 1e-4
+    records = [synthesize(pr, {"alpha": ALPHA, "beta": 0.0}, noise=sigma, rate=RATE, seed=20 + k,
+                          program="jacobian")[0] for k, pr in enumerate((plain, heavy))]
+    res = fit_joint([plain, heavy], records, {"alpha": 0.01, "beta": 0.0}, free=("alpha",), noise=sigma)
+    assert res.converged and res.n_samples == 2 * len(records[0])
+    assert abs(res.estimates[0] - ALPHA) <= 3 * res.stderr[0]
+    se = []
+    for pr, d in zip((plain, heavy), records):
+        r, jac, *_ = pr.evaluate(res.estimates, [d])
+        se.append(gauss_newton_statistics(r[0], jac[0][:, :1], len(d))[0][0])
+    assert res.stderr[0] == pytest.approx(1 / np.sqrt(sum(1 / s ** 2 for s in se)), rel=0.05), se
+    assert res.diagnostics["white"] and abs(res.diagnostics["rms_over_noise"] - 1) < 0.1
+    with pytest.raises(ModelError, match="at least two experiments"):
+        fit_joint([plain], records[:1])
 
 
 # ---------------------------------------------------------------------------- CLI

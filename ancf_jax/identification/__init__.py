@@ -8,7 +8,7 @@ forward-mode Jacobian, reverse-mode gradients), :mod:`.fit` (Levenberg–Marquar
 optax), :mod:`.report` (standard errors, correlation, identifiability, JSON, figure),
 :mod:`.synthetic` (synthetic measurements), :mod:`.discretization` (is the model's
 discretization error below the noise? refine if not), :mod:`.uncertainty` (parametric
-bootstrap). The method and measurements are in
+bootstrap, profile likelihood), :mod:`.joint` (several experiments, one parameter set). The method and measurements are in
 ``docs/identification.md``.
 
 Example::
@@ -22,6 +22,7 @@ Example::
 
 from .data import DataError, Measurements, read_csv, write_csv
 from .fit import fit, fit_batch
+from .joint import JointProblem, fit_joint
 from .parameters import Parameter
 from .problem import NUISANCE, Problem
 from .report import FitResult, ljung_box, misfit_diagnostics
@@ -29,4 +30,4 @@ from .synthetic import synthesize
 from .uncertainty import bootstrap, profile
 
 __all__ = ["DataError", "Measurements", "read_csv", "write_csv", "Parameter", "Problem", "NUISANCE", "fit",
-           "fit_batch", "FitResult", "synthesize", "bootstrap", "profile", "ljung_box", "misfit_diagnostics"]
+           "fit_batch", "fit_joint", "JointProblem", "FitResult", "synthesize", "bootstrap", "profile", "ljung_box", "misfit_diagnostics"]
