@@ -255,6 +255,24 @@ def build_parser() -> argparse.ArgumentParser:
                      help="simulated span [s] (default: the model's t_end); data must lie inside it")
     fit.add_argument("--dt", type=_positive_float, default=None,
                      help="solver step [s] (default: the scenario's solver.dt)")
+    fit.add_argument("--nuisance", default="", metavar="NAMES",
+                     help="nuisance parameters of the measurement fitted with the others, comma-separated: "
+                          "time_offset (trigger delay: the record's t is the model's t + tau), offset, gain "
+                          "(the sensor reads gain * y + offset); default none")
+    fit.add_argument("--max-time-offset", type=_positive_float, default=None,
+                     help="bound |tau| on a fitted time offset [s] (default 0.05)")
+    fit.add_argument("--noise", type=_positive_float, default=None,
+                     help="the data's noise level (standard deviation of a sample, output units): the "
+                          "residual RMS is tested against it")
+    fit.add_argument("--no-refine", action="store_true",
+                     help="skip the discretization check (by default the estimate is re-evaluated with "
+                          "the step halved and the mesh doubled, and the model refined while an estimate "
+                          "moves by more than 0.3 standard errors)")
+    fit.add_argument("--refine-budget", type=_nonnegative_int, default=2,
+                     help="most refinement rounds of the discretization check (default 2; 0: check only)")
+    fit.add_argument("--bootstrap", type=_nonnegative_int, default=0, metavar="N",
+                     help="parametric bootstrap with N synthetic records fitted as one vmapped batch "
+                          "(default 0: off)")
     fit.add_argument("--out", type=Path, default=None, help="output directory (default results/MODEL-fit)")
     fit.add_argument("--no-figures", action="store_true", help="skip the figure")
     fit.add_argument("--no-progress", action="store_true", help="no per-iteration lines")
@@ -641,7 +659,7 @@ def _check(args) -> int:
     return 0
 
 
-def _identification_problem(args, params):
+def _identification_problem(args, params, nuisance=()):
     """The identification problem of ``synth``/``fit`` (one-line errors, nothing compiled)."""
     from .errors import ModelError
     from .identification import Problem
@@ -653,8 +671,13 @@ def _identification_problem(args, params):
         except argparse.ArgumentTypeError as e:
             raise _UsageError(f"argument --elements: {e}") from None
     try:
+        extra = {}
+        if nuisance:
+            extra["nuisance"] = nuisance
+        if getattr(args, "max_time_offset", None) is not None:
+            extra["max_time_offset"] = args.max_time_offset
         return Problem.from_scenario(args.model, params, output=args.output, overrides=args.overrides,
-                                     elements=elements, t_end=args.t_end, dt=args.dt)
+                                     elements=elements, t_end=args.t_end, dt=args.dt, **extra)
     except (ScenarioError, ModelError) as e:
         raise _UsageError(str(e)) from None
 
@@ -690,16 +713,17 @@ def _parse_init(text: str) -> dict:
             v = float(value)
         except ValueError:
             v = math.nan
-        if not eq or not name.strip() or not math.isfinite(v) or v < 0:
-            raise _UsageError(f"argument --init: expected NAME=VALUE pairs with values >= 0 separated by "
-                              f"commas, got {text!r}")
+        signed = name.strip() in ("time_offset", "offset")  # nuisance parameters that may be < 0
+        if not eq or not name.strip() or not math.isfinite(v) or (v < 0 and not signed):
+            raise _UsageError(f"argument --init: expected NAME=VALUE pairs with values >= 0 (time_offset "
+                              f"and offset: any sign) separated by commas, got {text!r}")
         out[name.strip()] = v
     return out
 
 
 def _fit(args) -> int:
     from .errors import ModelError, SimulationError
-    from .identification import fit_batch, read_csv
+    from .identification import bootstrap, fit, fit_batch, read_csv
     from .identification.data import DataError
     if args.out is not None:
         _check_out(args.out)
@@ -715,18 +739,28 @@ def _fit(args) -> int:
             raise _UsageError(str(e)) from None
     # alpha and beta are always reported (fixed at the model's values unless fitted)
     names = list(dict.fromkeys(["alpha", "beta"] + requested))
-    problem = _identification_problem(args, names)
-    free = [p.name for p in problem.params if p.name in requested]
+    nuisance = [n.strip() for n in args.nuisance.split(",") if n.strip()]
+    problem = _identification_problem(args, names, nuisance)
+    free = [p.name for p in problem.params if p.name in requested] + list(problem.nuisance)
     for i in inits:
         unknown = set(i) - set(problem.names)
         if unknown:
             raise _UsageError(f"argument --init: unknown parameter(s) {', '.join(sorted(unknown))} "
                               f"(parameters: {', '.join(problem.names)})")
     out = _check_out(Path(args.out) if args.out is not None else Path("results") / f"{problem.name}-fit")
+    options = dict(free=free, window=args.window, method=args.method, max_iterations=args.max_iter,
+                   progress=not args.no_progress, noise=args.noise)
     try:
-        results = fit_batch(problem, datasets, inits or None, free=free, window=args.window,
-                            method=args.method, max_iterations=args.max_iter,
-                            progress=not args.no_progress)
+        if len(datasets) == 1 and len(inits) <= 1:
+            # one record: the discretization check (and refinement) unless --no-refine
+            results = [fit(problem, datasets[0], inits[0] if inits else None, discretization=not args.no_refine,
+                           refine_budget=args.refine_budget, **options)]
+            if args.bootstrap:
+                bootstrap(problem, results[0], args.bootstrap)
+        else:
+            if args.bootstrap:
+                raise _UsageError("argument --bootstrap: needs one --data and at most one --init")
+            results = fit_batch(problem, datasets, inits or None, **options)
     except (DataError, ModelError) as e:
         raise _UsageError(str(e)) from None
     except SimulationError as e:

@@ -6,7 +6,9 @@ Modules, one job each: :mod:`.data` (reading and checking ``t,y`` data),
 :mod:`.parameters` (which parameters, how they are set), :mod:`.problem` (the loss,
 forward-mode Jacobian, reverse-mode gradients), :mod:`.fit` (Levenberg–Marquardt and
 optax), :mod:`.report` (standard errors, correlation, identifiability, JSON, figure),
-:mod:`.synthetic` (synthetic measurements). The method and measurements are in
+:mod:`.synthetic` (synthetic measurements), :mod:`.discretization` (is the model's
+discretization error below the noise? refine if not), :mod:`.uncertainty` (parametric
+bootstrap, profile likelihood), :mod:`.joint` (several experiments, one parameter set). The method and measurements are in
 ``docs/identification.md``.
 
 Example::
@@ -20,10 +22,12 @@ Example::
 
 from .data import DataError, Measurements, read_csv, write_csv
 from .fit import fit, fit_batch
+from .joint import JointProblem, fit_joint
 from .parameters import Parameter
-from .problem import Problem
-from .report import FitResult
+from .problem import NUISANCE, Problem
+from .report import FitResult, ljung_box, misfit_diagnostics
 from .synthetic import synthesize
+from .uncertainty import bootstrap, profile
 
-__all__ = ["DataError", "Measurements", "read_csv", "write_csv", "Parameter", "Problem", "fit",
-           "fit_batch", "FitResult", "synthesize"]
+__all__ = ["DataError", "Measurements", "read_csv", "write_csv", "Parameter", "Problem", "NUISANCE", "fit",
+           "fit_batch", "fit_joint", "JointProblem", "FitResult", "synthesize", "bootstrap", "profile", "ljung_box", "misfit_diagnostics"]

@@ -50,9 +50,11 @@ from typing import Callable, Optional, Sequence
 import numpy as np
 
 from ..errors import ModelError, SimulationError
+from ..validation import check_positive
 from .data import Measurements
 from .problem import Problem
-from .report import DETERMINED, FIXED, SIGNIFICANCE, UNDETERMINED, ZERO, FitResult, gauss_newton_statistics
+from .report import (DETERMINED, FIXED, SIGNIFICANCE, UNDETERMINED, ZERO, FitResult, gauss_newton_statistics,
+                     misfit_diagnostics)
 
 METHODS = ("lm", "adam")
 #: θ stays within this many decades of the initial guess
@@ -105,23 +107,29 @@ def _gradient_test(m: _Member, mask, gtol, held) -> bool:
     return bool(np.max(cos) <= gtol)
 
 
-def _lm_trial(m: _Member, mask, lo) -> tuple[np.ndarray, np.ndarray]:
-    """Levenberg–Marquardt step on θ = log p: (trial p, held).
+def _lm_trial(m: _Member, mask, lo, islog, bound) -> tuple[np.ndarray, np.ndarray]:
+    """Levenberg–Marquardt step: (trial p, held).
 
-    The step δ solves (J_θᵀJ_θ + λ diag(J_θᵀJ_θ)) δ = −J_θᵀr with J_θ = J_p diag(p)
-    (Marquardt's scaling: the step does not depend on the parameters' units). It is
-    applied as p ← p (1 + δ), i.e. θ ← θ + log(1 + δ): the same first-order step, but
-    exact for the Gauss–Newton model linear in p. So a parameter whose best value is 0
-    (β on data made with β = 0: δ → −1) reaches its floor in one or two steps instead
-    of losing a constant factor e per iteration, and no step raises a parameter by
-    more than the linear model asks. θ stays at or above its floor ``lo``; a parameter
-    at the floor that the gradient pushes further down is held (an active bound)."""
+    Physical parameters (``islog``) are stepped in θ = log p, nuisance parameters
+    (time offset, sensor offset and gain, which may be 0 or negative) in p itself: with
+    s_k = p_k (log) or 1 (linear) and J_s = J_p diag(s), the step δ solves
+    (J_sᵀJ_s + λ diag(J_sᵀJ_s)) δ = −J_sᵀr (Marquardt's scaling: the step does not depend
+    on the parameters' units). A log parameter is updated as p ← p (1 + δ), i.e.
+    θ ← θ + log(1 + δ): the same first-order step, but exact for the Gauss–Newton model
+    linear in p. So a parameter whose best value is 0 (β on data made with β = 0:
+    δ → −1) reaches its floor in one or two steps instead of losing a constant factor e
+    per iteration, and no step raises a parameter by more than the linear model asks.
+    θ stays at or above its floor ``lo``; a parameter at the floor that the gradient
+    pushes further down is held (an active bound). A linear parameter is updated as
+    p ← p + δ and kept within ``bound`` (|p| <= bound; inf: unbounded)."""
     pf = m.p[mask]
-    theta = np.log(pf)
-    jt = m.jac[:, mask] * pf[None, :]
+    lg = islog[mask]
+    scale = np.where(lg, pf, 1.0)
+    theta = np.where(lg, np.log(np.where(lg, pf, 1.0)), 0.0)
+    jt = m.jac[:, mask] * scale[None, :]
     g = jt.T @ m.r
     a = jt.T @ jt
-    held = (theta <= lo + 1e-9) & (g > 0.0)
+    held = lg & (theta <= lo + 1e-9) & (g > 0.0)
     live = ~held & (np.diag(a) > 0)
     step = np.zeros_like(pf)
     if live.any():
@@ -131,8 +139,9 @@ def _lm_trial(m: _Member, mask, lo) -> tuple[np.ndarray, np.ndarray]:
     # a parameter the step lowers by more than a factor 1e6 goes to its floor (its best
     # value is 0 or below)
     new = np.where(1.0 + step < 1e-6, lo, np.maximum(theta + np.log(np.maximum(1.0 + step, 1e-300)), lo))
+    lin = np.clip(pf + step, -bound[mask], bound[mask])
     trial = m.p.copy()
-    trial[mask] = np.exp(new)
+    trial[mask] = np.where(lg, np.exp(new), lin)
     # predicted decrease of the model linear in p
     m.pred = m.cost - float(np.sum((m.r + m.jac[:, mask] @ (trial[mask] - pf)) ** 2))
     return trial, held
@@ -140,7 +149,7 @@ def _lm_trial(m: _Member, mask, lo) -> tuple[np.ndarray, np.ndarray]:
 
 def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, free: Sequence[str], *,
          method: str, max_iterations: int, xtol: float, ftol: float, gtol: float,
-         learning_rate: float, optimizer, progress) -> list[FitResult]:
+         learning_rate: float, optimizer, progress, noise: Optional[float] = None) -> list[FitResult]:
     names = problem.names
     for f in free:
         if f not in names:
@@ -152,9 +161,13 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
     if method not in METHODS and optimizer is None:
         raise ModelError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     B = len(p0)
-    bad = np.argwhere(p0[:, mask] <= 0)
+    islog = np.arange(len(names)) < problem.n_physical
+    bound = np.array([problem.max_time_offset if n == "time_offset" else math.inf for n in names])
+    if use_optax and problem.nuisance:
+        raise ModelError("nuisance parameters (time_offset, offset, gain) are fitted by method 'lm' only")
+    bad = np.argwhere(p0[:, mask & islog] <= 0)
     if bad.size:
-        n = [x for x, k in zip(names, mask) if k][bad[0][1]]
+        n = [x for x, k in zip(names, mask & islog) if k][bad[0][1]]
         raise ModelError(f"initial value of {n} must be > 0 (the fit works on log {n})")
     say: Optional[Callable[[str], None]] = progress if callable(progress) else None
     bar = None
@@ -177,7 +190,7 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
     # loss (weighted mean square, m²) at which the residual is at rounding level
     zero = [ZERO_RESIDUAL ** 2 * float(np.sum(d.w * d.y ** 2) / np.sum(d.w)) for d in map(data_of, range(B))]
     evaluations = 1
-    lo = np.log(np.where(mask, p0, 1.0)) - DECADES * math.log(10)
+    lo = np.log(np.where(mask & islog, p0, 1.0)) - DECADES * math.log(10)
     if use_optax:
         import optax
         opt = optimizer if optimizer is not None else optax.adam(learning_rate)
@@ -217,7 +230,7 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
                 upd, m.opt_state = opt.update(grad, m.opt_state, theta)
                 trials[b, mask] = np.exp(np.maximum(theta + np.asarray(upd), lo[b, mask]))
             else:
-                trial, held = _lm_trial(m, mask, lo[b, mask])
+                trial, held = _lm_trial(m, mask, lo[b, mask], islog, bound)
                 if _gradient_test(m, mask, gtol, held):
                     m.stop("gradient below gtol" + (" (a parameter held at its floor, i.e. 0)"
                                                      if held.any() else ""))
@@ -287,17 +300,19 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
         se[mask] = se_free
         # a parameter at (within two decades of) its floor, ten decades below its start,
         # is at its bound 0
-        at_floor = mask & (np.log(np.maximum(m.p, 1e-300)) <= lo[b] + 2.0 * math.log(10.0))
+        at_floor = mask & islog & (np.log(np.maximum(m.p, 1e-300)) <= lo[b] + 2.0 * math.log(10.0))
         status = []
         for k in range(len(names)):
             if not mask[k]:
                 status.append(FIXED)
             elif not np.isfinite(se[k]):
                 status.append(UNDETERMINED)
-            elif at_floor[k] or m.p[k] < SIGNIFICANCE * se[k]:
+            elif islog[k] and (at_floor[k] or m.p[k] < SIGNIFICANCE * se[k]):
                 status.append(ZERO)
-            else:
+            else:  # a nuisance parameter with a finite standard error is determined (it may be ~0)
                 status.append(DETERMINED)
+        r_data = m.r[:len(data.t)]  # without the zero-weight padding of a batch
+        diag = misfit_diagnostics(r_data[data.w > 0], noise=noise, n_params=int(mask.sum()))
         out.append(FitResult(
             names=names, units=problem.units, free=tuple(n for n, k in zip(names, mask) if k),
             init=p0[b].copy(), estimates=m.p.copy(), stderr=se, correlation=corr, status=tuple(status),
@@ -305,8 +320,17 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
             converged=m.converged, stop_reason=m.reason, residual_rms=math.sqrt(max(m.cost, 0.0)),
             n_samples=n_eff, wall_time_s=wall / B, compile_time_s=compile_s,
             method="optax" if optimizer is not None else method, t_grid=layout.grid, y_fit=m.y.copy(),
-            y_init=y_init[b].copy(), data=data, model=problem.name, output=problem.output.name))
+            y_init=y_init[b].copy(), data=data, model=problem.name, output=problem.output.name,
+            nuisance=problem.nuisance, diagnostics=diag, residuals=r_data.copy(),
+            jacobian=m.jac[:len(data.t)].copy(), dt=problem.dt, elements=problem.elements,
+            y_measured=np.asarray(measured_host(problem, layout, m.p, data.t, m.y))))
     return out
+
+
+def measured_host(problem: Problem, layout, p, t, y_grid) -> np.ndarray:
+    """The model of the measurement (Eq. M) at times t from an output curve on the grid."""
+    from .problem import measured
+    return np.asarray(measured(layout, np.asarray(p, float), np.asarray(t, float), np.asarray(y_grid)))
 
 
 def _initial(problem: Problem, init, free) -> np.ndarray:
@@ -322,14 +346,16 @@ def _initial(problem: Problem, init, free) -> np.ndarray:
 def fit(problem: Problem, data: Measurements, init: dict | Sequence[float] | None = None, *,
         free: Sequence[str] | None = None, window: tuple | None = None, method: str = "lm",
         max_iterations: int | None = None, xtol: float = 1e-8, ftol: float = 1e-10, gtol: float = 1e-10,
-        learning_rate: float = 0.05, optimizer=None, progress=False) -> FitResult:
+        learning_rate: float = 0.05, optimizer=None, progress=False, noise: Optional[float] = None,
+        discretization: bool = False, refine: bool = True, refine_budget: int = 2,
+        shift_limit: float = 0.3, refine_axes: Sequence[str] = ("step", "mesh")) -> FitResult:
     """Fit the problem's parameters to one data set.
 
     Args:
         problem: model, parameters and output (:class:`~.problem.Problem`).
         data: measurements (:func:`~.data.read_csv`, :meth:`~.data.Measurements.from_arrays`).
         init: initial values {name: value} (physical units; missing names: the model's
-            values); every free parameter must start > 0.
+            values); every free physical parameter must start > 0.
         free: the parameters to fit (default all of the problem's); the others stay at
             their initial values (which may be 0), using the same compiled program.
         window: (t_start, t_end) [s]: fit only the samples in this time window.
@@ -341,20 +367,40 @@ def fit(problem: Problem, data: Measurements, init: dict | Sequence[float] | Non
         learning_rate: Adam's step in log-parameters.
         optimizer: any optax GradientTransformation (overrides ``method``).
         progress: True prints one line per iteration to stderr; a callable receives them.
+        noise: the measurement's noise level σ (standard deviation of a sample of weight
+            1, output units), if known: the report compares the residual RMS with it
+            (:func:`~.report.misfit_diagnostics`).
+        discretization: check at the optimum how far the estimates move when the step is
+            halved and the mesh doubled (:mod:`.discretization`); off by default here,
+            on by default in ``ancf-jax fit``.
+        refine: with ``discretization``, refine and fit again while an estimate moves by
+            more than ``shift_limit`` standard errors, at most ``refine_budget`` times.
+        refine_axes: which refinements the check makes: ``"step"`` (h/2) and/or
+            ``"mesh"`` (elements × 2; problems built from a scenario with one beam).
 
     Returns:
         :class:`~.report.FitResult`.
     """
-    return fit_batch(problem, [data], [init], free=free, window=window, method=method,
-                     max_iterations=max_iterations, xtol=xtol, ftol=ftol, gtol=gtol,
-                     learning_rate=learning_rate, optimizer=optimizer, progress=progress)[0]
+    options = dict(free=free, method=method, max_iterations=max_iterations, xtol=xtol, ftol=ftol, gtol=gtol,
+                   learning_rate=learning_rate, optimizer=optimizer, progress=progress, noise=noise)
+    data = problem.prepare(data, window)
+
+    def one(pr, d, i, **kw):
+        return fit_batch(pr, [d], [i], **kw)[0]
+
+    if not discretization:
+        return one(problem, data, init, **options)
+    from .discretization import controlled_fit
+    result, _ = controlled_fit(one, problem, data, init, refine=refine, budget=refine_budget,
+                               limit=shift_limit, axes=tuple(refine_axes), **options)
+    return result
 
 
 def fit_batch(problem: Problem, datasets: Sequence[Measurements], inits: Sequence | None = None, *,
               free: Sequence[str] | None = None, window: tuple | None = None, method: str = "lm",
               max_iterations: int | None = None, xtol: float = 1e-8, ftol: float = 1e-10,
               gtol: float = 1e-10, learning_rate: float = 0.05, optimizer=None,
-              progress=False) -> list[FitResult]:
+              progress=False, noise: Optional[float] = None) -> list[FitResult]:
     """Several fits under one ``vmap``: several data sets (one initial guess), several
     initial guesses (one data set), or pairs of both (equal counts). Data sets may have
     different lengths (padded with zero-weight samples). Arguments as :func:`fit`.
@@ -375,4 +421,4 @@ def fit_batch(problem: Problem, datasets: Sequence[Measurements], inits: Sequenc
         max_iterations = 500 if (method == "adam" or optimizer is not None) else 50
     return _fit(problem, datasets, p0, free, method=method, max_iterations=int(max_iterations),
                 xtol=xtol, ftol=ftol, gtol=gtol, learning_rate=learning_rate, optimizer=optimizer,
-                progress=progress)
+                progress=progress, noise=None if noise is None else check_positive("noise", noise, "output units"))

@@ -52,6 +52,21 @@ from .data import DataError, Measurements
 
 #: output kinds that are functions of the coordinates alone (fittable)
 FITTABLE_KINDS = ("node", "point", "body", "sliding", "sliding_point", "stress")
+#: nuisance parameters of a measurement (Eq. M of :func:`measured`), in this order
+NUISANCE = ("time_offset", "offset", "gain")
+#: their values when they are not fitted (and their default initial values)
+NUISANCE_DEFAULT = {"time_offset": 0.0, "offset": 0.0, "gain": 1.0}
+#: default bound |τ| <= this on the fitted time offset [s]
+MAX_TIME_OFFSET = 0.05
+
+
+def output_unit(output: Output) -> str:
+    """SI unit of a fittable output's values."""
+    if output.kind == "stress":
+        return "Pa"
+    if output.component == "theta":
+        return "rad"
+    return "m"
 
 
 # ---------------------------------------------------------------------------- outputs
@@ -97,6 +112,19 @@ def check_output(system: System, output: Output) -> None:
                          f"depend on the positions only ({', '.join(FITTABLE_KINDS)})")
 
 
+def check_nuisance(nuisance) -> tuple:
+    """Nuisance parameter names (a sequence or ``"a,b"``) in :data:`NUISANCE` order;
+    ModelError for an unknown or repeated name."""
+    if isinstance(nuisance, str):
+        nuisance = [n.strip() for n in nuisance.split(",") if n.strip()]
+    bad = [n for n in nuisance if n not in NUISANCE]
+    if bad:
+        raise ModelError(f"unknown nuisance parameter {bad[0]!r}; known: {', '.join(NUISANCE)}")
+    if len(set(nuisance)) != len(nuisance):
+        raise ModelError("nuisance: a parameter is given twice")
+    return tuple(n for n in NUISANCE if n in nuisance)
+
+
 # ---------------------------------------------------------------------------- problem
 @dataclasses.dataclass(frozen=True)
 class Layout:
@@ -105,6 +133,9 @@ class Layout:
     Attributes:
         params: the traced parameters; output: the fitted output.
         n_steps: steps simulated (one output row per step); h: step [s]; t0: start [s].
+        nuisance: names of the measurement's nuisance parameters, a subset of
+            :data:`NUISANCE` in that order; their values follow the physical
+            parameters in the parameter vector p.
     """
 
     params: tuple
@@ -112,6 +143,7 @@ class Layout:
     n_steps: int
     h: float
     t0: float
+    nuisance: tuple = ()
 
     @property
     def grid(self) -> np.ndarray:
@@ -134,11 +166,33 @@ def simulate_output(system: System, state: State, solver, layout: Layout, p):
     return y, loop.status == Failure.OK
 
 
+def measured(layout: Layout, p, t, y_grid):
+    """The model of the measurement at the sample times t [s] (N,):
+
+        m_i = g · y_sim(t_i + τ) + c            (Eq. M)
+
+    with y_sim the output on the simulation grid interpolated linearly, τ the time
+    offset [s] (the record's t = 0 is the simulation's t = τ: a trigger delay), c the
+    sensor offset [output unit] and g the sensor gain [-]; each is present only when
+    named in ``layout.nuisance`` (else τ = 0, c = 0, g = 1, and m_i = y_sim(t_i)).
+    Model times before t0 take the initial value (the system at rest before release),
+    times past the grid its last value. Differentiable in τ (the slope of the linear
+    interpolant), c and g."""
+    k = len(layout.params)
+    nz = {n: p[k + i] for i, n in enumerate(layout.nuisance)}
+    y_sim = jnp.interp(t + nz.get("time_offset", 0.0), jnp.asarray(layout.grid), y_grid)
+    if "gain" in nz:
+        y_sim = nz["gain"] * y_sim
+    if "offset" in nz:
+        y_sim = y_sim + nz["offset"]
+    return y_sim
+
+
 def residuals(system, state, solver, layout: Layout, p, t, y, w):
-    """(r, (r, y_grid, ok)): weighted residuals r_i = sqrt(w_i/Σw)(y_sim(t_i) − y_i)."""
+    """(r, (r, y_grid, ok)): weighted residuals r_i = sqrt(w_i/Σw)(m_i − y_i), with m_i
+    the model of the measurement (:func:`measured`, Eq. M)."""
     y_grid, ok = simulate_output(system, state, solver, layout, p)
-    y_sim = jnp.interp(t, jnp.asarray(layout.grid), y_grid)
-    r = jnp.sqrt(w / jnp.sum(w)) * (y_sim - y)
+    r = jnp.sqrt(w / jnp.sum(w)) * (measured(layout, p, t, y_grid) - y)
     return r, (r, y_grid, ok)
 
 
@@ -235,10 +289,15 @@ class Problem:
 
     def __init__(self, system: System, state: State, params=("alpha", "beta"), output: Output | None = None,
                  *, dt: float, t_end: float, solver="generalized-alpha", solver_options: dict | None = None,
-                 name: str = ""):
+                 name: str = "", nuisance: Sequence[str] = (), max_time_offset: float = MAX_TIME_OFFSET):
         from ..validation import check_positive
         self.system, self.state = system, state
         self.params = P.resolve(system, params)
+        #: the nuisance parameters of the measurement (:func:`measured`), in NUISANCE order
+        self.nuisance = check_nuisance(nuisance)
+        self.max_time_offset = check_positive("max_time_offset", max_time_offset, "s")
+        #: how the problem was built from a scenario (for :meth:`refined`); None otherwise
+        self.recipe = None
         if output is None:
             if len(system.beam_names) != 1:
                 raise ModelError("give the output to fit (the system has several beams)")
@@ -261,7 +320,8 @@ class Problem:
     def from_scenario(cls, source="m1", params=("alpha", "beta"), output: str | None = "tip_y", *,
                       overrides: Sequence[str] = (), elements: int | None = None,
                       t_end: float | None = None, dt: float | None = None,
-                      solver_options: dict | None = None) -> "Problem":
+                      solver_options: dict | None = None, nuisance: Sequence[str] = (),
+                      max_time_offset: float = MAX_TIME_OFFSET) -> "Problem":
         """A problem on a shipped scenario (``"m1"``) or scenario file.
 
         Args:
@@ -274,8 +334,13 @@ class Problem:
             dt: solver step [s] (default: the scenario's ``solver.dt``; also sets
                 ``outputs.dt``, which must not be shorter).
             solver_options: solver options on top of the scenario's.
+            nuisance: nuisance parameters of the measurement to fit with the physical
+                ones (any of ``time_offset``, ``offset``, ``gain``; :func:`measured`).
+            max_time_offset: bound |τ| on a fitted time offset [s]; the simulation runs
+                this much past the last sample.
         """
         from ..scenario import load_scenario
+        check_nuisance(nuisance)  # before anything is built
         extra = list(overrides)
         if dt is not None:
             from ..validation import check_positive
@@ -301,22 +366,62 @@ class Problem:
         if sc.initial_mode == "static" and any(p.kind in ("E", "mass") for p in P.resolve(system, params)):
             raise ModelError(f"scenario {sc.name!r} starts from a static equilibrium, which depends on "
                              "E and the masses; only alpha and beta can be identified on it")
-        return cls(system, state, params, outs[output], dt=run.dt,
-                   t_end=run.t_end if t_end is None else t_end, solver=run.solver,
-                   solver_options={**run.solver_options, **(solver_options or {})}, name=sc.name)
+        problem = cls(system, state, params, outs[output], dt=run.dt,
+                      t_end=run.t_end if t_end is None else t_end, solver=run.solver,
+                      solver_options={**run.solver_options, **(solver_options or {})}, name=sc.name,
+                      nuisance=nuisance, max_time_offset=max_time_offset)
+        problem.recipe = dict(source=source, params=tuple(params) if not isinstance(params, str) else params,
+                              output=output, overrides=tuple(overrides), solver_options=solver_options,
+                              elements=dict(sc.beam_elements), t_end=run.t_end if t_end is None else t_end)
+        return problem
+
+    # ------------------------------------------------------------------ discretization
+    @property
+    def elements(self) -> Optional[int]:
+        """Element count of the (single) beam of a scenario-built problem, else None."""
+        if self.recipe is None or len(self.recipe["elements"]) != 1:
+            return None
+        return int(next(iter(self.recipe["elements"].values())))
+
+    def refined(self, *, step: int = 1, mesh: int = 1) -> "Problem":
+        """The same problem with the step divided by ``step`` and (scenario-built
+        problems with one beam) the element count multiplied by ``mesh``."""
+        if mesh == 1:
+            new = Problem(self.system, self.state, tuple(p.name for p in self.params), self.output,
+                          dt=self.dt / step, t_end=self.t_end - self.t0, solver=self.solver, name=self.name,
+                          nuisance=self.nuisance, max_time_offset=self.max_time_offset)
+            new.recipe = self.recipe
+            return new
+        if self.elements is None:
+            raise ModelError("the mesh of this problem cannot be refined (it was not built from a "
+                             "scenario with one beam)")
+        rc = self.recipe
+        return Problem.from_scenario(rc["source"], rc["params"], rc["output"], overrides=rc["overrides"],
+                                     elements=self.elements * mesh, t_end=rc["t_end"], dt=self.dt / step,
+                                     solver_options=rc["solver_options"], nuisance=self.nuisance,
+                                     max_time_offset=self.max_time_offset)
 
     # ------------------------------------------------------------------ parameters
     @property
     def names(self) -> tuple[str, ...]:
-        return tuple(p.name for p in self.params)
+        """Names of all entries of the parameter vector: physical, then nuisance."""
+        return tuple(p.name for p in self.params) + self.nuisance
 
     @property
     def units(self) -> tuple[str, ...]:
-        return tuple(p.unit for p in self.params)
+        unit = {"time_offset": "s", "offset": output_unit(self.output), "gain": "-"}
+        return tuple(p.unit for p in self.params) + tuple(unit[n] for n in self.nuisance)
+
+    @property
+    def n_physical(self) -> int:
+        """Number of physical parameters (the first entries of p; fitted on log p)."""
+        return len(self.params)
 
     def values(self) -> np.ndarray:
-        """The parameters' values in the built system (physical units)."""
-        return np.array([float(p.get(self.system)) for p in self.params])
+        """The parameters' values in the built system (physical units), then the
+        nuisance parameters' neutral values (τ = 0, c = 0, g = 1)."""
+        return np.array([float(p.get(self.system)) for p in self.params]
+                        + [NUISANCE_DEFAULT[n] for n in self.nuisance])
 
     def vector(self, values: dict | Sequence[float] | None = None) -> np.ndarray:
         """Physical parameter vector from a dict name → value (missing names keep the
@@ -338,7 +443,16 @@ class Problem:
                 raise ModelError(f"expected {len(p)} parameter values ({', '.join(self.names)}), got {arr.size}")
             p = arr.copy()
         for n, x in zip(self.names, p):
-            if not math.isfinite(x) or x < 0:
+            if n in ("time_offset", "offset"):
+                if not math.isfinite(x):
+                    raise ModelError(f"parameter {n} must be a finite number, got {x!r}")
+                if n == "time_offset" and abs(x) > self.max_time_offset:
+                    raise ModelError(f"parameter time_offset must be within ±{self.max_time_offset:g} s "
+                                     f"(max_time_offset), got {x!r}")
+            elif n == "gain":
+                if not math.isfinite(x) or x <= 0:
+                    raise ModelError(f"parameter gain must be a finite number > 0, got {x!r}")
+            elif not math.isfinite(x) or x < 0:
                 raise ModelError(f"parameter {n} must be a finite number >= 0, got {x!r}")
         return p
 
@@ -357,8 +471,10 @@ class Problem:
     def layout(self, datasets: Sequence[Measurements]) -> Layout:
         """The simulation needed by these data sets: up to the last sample, on the step."""
         t_last = max(float(d.t[-1]) for d in datasets)
+        if "time_offset" in self.nuisance:  # the model at t + τ, |τ| <= max_time_offset
+            t_last += self.max_time_offset
         n = max(1, int(math.ceil((t_last - self.t0) / self.dt - 1e-9)))
-        return Layout(self.params, self.output, n, self.dt, self.t0)
+        return Layout(self.params, self.output, n, self.dt, self.t0, self.nuisance)
 
     def _args(self, layout, p, t, y, w):
         return (self.system, self.state, self.solver, layout, jnp.asarray(p, float), jnp.asarray(t),
@@ -459,6 +575,10 @@ class Problem:
         parameter stays positive): ``f(theta) -> loss`` [m²]; jit/grad/jvp/vmap it."""
         layout = self.layout([data])
         t, y, w = (jnp.asarray(a[0]) for a in stack_data([data]))
+
+        if self.nuisance:
+            raise ModelError("loss_function works on log p of the physical parameters; this problem "
+                             "has nuisance parameters (use evaluate)")
 
         def f(theta):
             r, _ = residuals(self.system, self.state, self.solver, layout, jnp.exp(theta), t, y, w)

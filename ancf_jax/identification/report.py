@@ -68,6 +68,84 @@ def gauss_newton_statistics(r: np.ndarray, jac: np.ndarray, n_samples: int):
     return se, corr, s2
 
 
+#: Ljung–Box p-value below which the residuals are called structured (not white)
+WHITENESS_LEVEL = 0.01
+#: largest lag of the Ljung–Box statistic (fewer for short records: N // 5)
+MAX_LAG = 20
+
+
+def autocorrelation(u: np.ndarray, lags: int) -> np.ndarray:
+    """Sample autocorrelation ρ_k, k = 1..lags, of a series u (N,) (Box & Jenkins):
+
+        ρ_k = Σ_{i=k}^{N−1} (u_i − ū)(u_{i−k} − ū) / Σ_i (u_i − ū)²
+    """
+    u = np.asarray(u, float) - np.mean(u)
+    c0 = float(u @ u)
+    if c0 == 0.0:
+        return np.zeros(lags)
+    return np.array([float(u[k:] @ u[:-k]) / c0 for k in range(1, lags + 1)])
+
+
+def ljung_box(u: np.ndarray, lags: Optional[int] = None) -> tuple[float, float, int]:
+    """Ljung–Box whiteness test of a series u (N,): (Q, p-value, lags m) with
+
+        Q = N (N + 2) Σ_{k=1}^{m} ρ_k² / (N − k),     Q ~ χ²(m) for white noise
+
+    (Ljung & Box 1978); the p-value is the χ²(m) upper tail, ``scipy.stats.chi2.sf``.
+    Default m = min(20, N // 5)."""
+    from scipy.stats import chi2
+    n = len(u)
+    m = max(1, min(MAX_LAG, n // 5)) if lags is None else int(lags)
+    rho = autocorrelation(u, m)
+    q = float(n * (n + 2) * np.sum(rho ** 2 / (n - np.arange(1, m + 1))))
+    return q, float(chi2.sf(q, m)), m
+
+
+def misfit_diagnostics(r: np.ndarray, *, noise: Optional[float] = None, n_params: int = 0) -> dict:
+    """Does the model explain the data? From the weighted residuals r (N,) of the samples
+    with positive weight, in time order (r_i = sqrt(w_i/Σw) e_i):
+
+    * whiteness: Ljung–Box Q over m lags and its p-value (:func:`ljung_box`), and the
+      lag-1 autocorrelation; p < :data:`WHITENESS_LEVEL` means structured residuals
+      (model error, an unmodelled offset, drift or delay, or coloured noise), and the
+      Gauss–Newton standard errors, which assume white noise, are then too small;
+    * with a stated noise level σ (the standard deviation of a sample of weight 1):
+      RMS/σ and the χ² test of Σ w e²/σ² ~ χ²(N − n): a p-value below 0.01 in the upper
+      tail means the residuals are larger than the noise can explain.
+
+    Returns a JSON-ready dict; ``notes`` holds the sentences for the report."""
+    from scipy.stats import chi2
+    r = np.asarray(r, float)
+    n = len(r)
+    q, p, m = ljung_box(r)
+    rho1 = float(autocorrelation(r, 1)[0]) if n > 1 else 0.0
+    rms = math.sqrt(float(r @ r))
+    d = dict(n=n, ljung_box_q=q, ljung_box_p=p, ljung_box_lags=m, lag1_autocorrelation=rho1,
+             residual_rms=rms, white=bool(p >= WHITENESS_LEVEL), noise=noise, rms_over_noise=None,
+             chi2_p_high=None, notes=[])
+    if p < WHITENESS_LEVEL:
+        d["notes"].append(
+            f"the model does not explain the data: the residuals are not white (Ljung–Box Q = {q:.4g} over "
+            f"{m} lags, p = {p:.2g}; lag-1 autocorrelation {rho1:+.3f}); look for a model error (mesh, "
+            "step, physics), an unmodelled sensor offset, gain or trigger delay, or coloured noise; the "
+            "standard errors assume white noise and are too small")
+    if noise is not None and noise > 0:
+        dof = max(1, n - n_params)
+        x = n * rms ** 2 / noise ** 2
+        hi, lo = float(chi2.sf(x, dof)), float(chi2.cdf(x, dof))
+        d.update(rms_over_noise=rms / noise, chi2_p_high=hi, chi2_p_low=lo)
+        if hi < 0.01:
+            d["notes"].append(
+                f"the model does not explain the data: the residual RMS {rms:.4g} is {rms / noise:.3g} × "
+                f"the stated noise {noise:.4g} (χ² test p = {hi:.2g})")
+        elif lo < 0.01:
+            d["notes"].append(
+                f"the residual RMS {rms:.4g} is only {rms / noise:.3g} × the stated noise {noise:.4g} "
+                f"(χ² test p = {lo:.2g} in the lower tail): the noise level is overstated or the data "
+                "were filtered")
+    return d
+
+
 @dataclasses.dataclass
 class FitResult:
     """Outcome of one fit (one data set, one initial guess).
@@ -114,6 +192,15 @@ class FitResult:
     data: object = None
     model: str = ""
     output: str = ""
+    nuisance: tuple = ()
+    diagnostics: Optional[dict] = None
+    residuals: Optional[np.ndarray] = None
+    jacobian: Optional[np.ndarray] = None
+    dt: Optional[float] = None
+    elements: Optional[int] = None
+    y_measured: Optional[np.ndarray] = None
+    discretization: Optional[dict] = None
+    bootstrap: Optional[dict] = None
 
     # ------------------------------------------------------------------ verdicts
     def value(self, name: str) -> Optional[float]:
@@ -152,6 +239,9 @@ class FitResult:
         if s == UNDETERMINED:
             return ("the fitted output does not depend on it, or it cannot be separated from the other "
                     "parameters (JᵀJ is singular)")
+        if name in self.nuisance:
+            return (f"nuisance parameter of the measurement: {est:.6g} ± {se:.2g} {u}"
+                    + (f"{corr}" if corr else ""))
         if s == ZERO:
             return (f"not distinguishable from zero: the estimate {est:.3g} {u} is within "
                     f"{SIGNIFICANCE:g} standard errors ({se:.3g} {u}) of 0, so the data cannot tell it "
@@ -177,6 +267,10 @@ class FitResult:
             elif s == UNDETERMINED:
                 out.append(f"{n} is not determined by the data (the output does not depend on it, "
                            "or the parameters are not separable: JᵀJ is singular)")
+        if self.diagnostics:
+            out += self.diagnostics["notes"]
+        if self.discretization:
+            out += self.discretization["notes"]
         return out
 
     # ------------------------------------------------------------------ output
@@ -197,7 +291,15 @@ class FitResult:
         d["raw_estimates"] = {n: float(v) for n, v in zip(self.names, self.estimates)}
         d["correlation"] = {"params": [n for n in self.names if n in self.free],
                             "matrix": [[_num(x) for x in row] for row in self.correlation]}
+        d["nuisance"] = list(self.nuisance)
         d["notes"] = self.notes()
+        d["diagnostics"] = None if self.diagnostics is None else {
+            k: v for k, v in self.diagnostics.items() if k != "notes"}
+        d["discretization"] = None if self.discretization is None else {
+            k: v for k, v in self.discretization.items() if k != "notes"}
+        d["bootstrap"] = self.bootstrap
+        d["dt"] = self.dt
+        d["elements"] = self.elements
         d.update(residual_rms=self.residual_rms, n_samples=self.n_samples,
                  loss_history=[float(x) for x in self.loss_history], iterations=self.iterations,
                  evaluations=self.evaluations, converged=self.converged, stop_reason=self.stop_reason,
@@ -221,7 +323,8 @@ class FitResult:
             u = self.units[k]
             s = self.status[k]
             if s == DETERMINED:
-                lines.append(f"  {n:<{width}} = {self.estimates[k]:.6g} ± {self.stderr[k]:.2g} {u}")
+                tag = " (nuisance)" if n in self.nuisance else ""
+                lines.append(f"  {n:<{width}} = {self.estimates[k]:.6g} ± {self.stderr[k]:.2g} {u}{tag}")
             elif s == FIXED:
                 lines.append(f"  {n:<{width}} = {self.estimates[k]:.6g} {u} (fixed)")
             elif s == ZERO:
@@ -235,6 +338,20 @@ class FitResult:
                 lines.append(f"  correlation({a}, {free[j]}) = {self.correlation[i, j]:+.3f}")
         lines.append(f"  residual RMS {self.residual_rms:.4g} (loss {self.loss_history[0]:.3g} -> "
                      f"{self.loss_history[-1]:.3g})")
+        dg = self.diagnostics
+        if dg:
+            noise = (f"; RMS / stated noise {dg['rms_over_noise']:.3g}" if dg.get("rms_over_noise") is not None
+                     else "")
+            lines.append(f"  residuals {'white' if dg['white'] else 'STRUCTURED'}: Ljung–Box p = "
+                         f"{dg['ljung_box_p']:.2g} ({dg['ljung_box_lags']} lags), lag-1 autocorrelation "
+                         f"{dg['lag1_autocorrelation']:+.3f}{noise}")
+        dz = self.discretization
+        if dz:
+            lines.append(f"  discretization: {dz['summary']}")
+        bs = self.bootstrap
+        if bs:
+            lines.append("  bootstrap (" + str(bs["members"]) + " members): " + ", ".join(
+                f"{n} sd {bs['std'][n]:.2g} (GN SE {bs['gn_stderr'][n]:.2g})" for n in bs["std"]))
         lines += [f"  note: {n}" for n in self.notes()]
         return "\n".join(lines)
 
@@ -255,13 +372,17 @@ class FitResult:
                 return f"{n} < {self.upper_bound(n):.3g} (95 %, not identifiable)"
             return f"{n} not identifiable"
         fit = ", ".join(label(k, n) for k, n in enumerate(self.names))
-        ax.plot(self.t_grid, self.y_fit, color="tab:blue", lw=1.3, label=f"fitted ({fit})")
+        if self.nuisance and self.y_measured is not None and d is not None:
+            ax.plot(d.t, self.y_measured, color="tab:blue", lw=1.3, label=f"fitted ({fit})")
+        else:
+            ax.plot(self.t_grid, self.y_fit, color="tab:blue", lw=1.3, label=f"fitted ({fit})")
         ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
         ax.set_title(f"{self.model} {self.output}: residual RMS {self.residual_rms:.3g}", fontsize=10)
         if d is not None:
-            ax2.plot(d.t, np.interp(d.t, self.t_grid, self.y_fit) - d.y, ".", ms=1.5, color="tab:blue")
+            model = self.y_measured if self.y_measured is not None else np.interp(d.t, self.t_grid, self.y_fit)
+            ax2.plot(d.t, model - d.y, ".", ms=1.5, color="tab:blue")
         ax2.axhline(0.0, color="k", lw=0.6)
         ax2.set_xlabel("time [s]")
         ax2.set_ylabel("fit − data")
