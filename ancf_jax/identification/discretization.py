@@ -29,7 +29,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..errors import ModelError
+from ..errors import ModelError, SimulationError
 from .data import Measurements
 from .problem import Problem, _values_jit
 
@@ -66,7 +66,10 @@ def check(problem: Problem, result, data: Measurements, axes: Sequence[str] = AX
         fine = problem.refined(step=2) if axis == "step" else problem.refined(mesh=2)
         (r, _, ok), _, _ = fine._batch(_values_jit, result.estimates[None], [data])
         if not bool(ok[0]):
-            raise ModelError(f"the refined model ({axis}) fails at the estimate")
+            raise SimulationError(f"the discretization check's refined model ({axis}: dt = {fine.dt:g} s, "
+                                  f"{fine.elements} elements) fails at the estimate; fit again with "
+                                  "--no-refine (discretization=False) or a smaller step",
+                                  time=float("nan"), reason="refined_model_failed")
         delta = shift_of_estimate(result, r[0])
         z = delta / se
         free = [k for k, n in enumerate(result.names) if n in result.free and np.isfinite(z[k])]
