@@ -178,13 +178,16 @@ def plain():
 
 
 @pytest.mark.slow  # three new compilations (runs at h = 0.5 ms and 1 ms, the fit at 1 ms)
-def test_discretization_check_catches_step_bias_and_refinement_removes_it(plain):
+def test_discretization_check_catches_step_bias(plain):
     """Foreign data: the same model at a 4 × finer step (0.5 ms), 20 µm noise, fitted at
-    the default 2 ms with the check on the step axis. The check finds that halving the
-    step moves α by more than 0.3 SE, refines once to 1 ms, fits again, and the recheck
-    (1 ms → 0.5 ms) is within the limit. References: the refit itself (Eq. D's
-    predicted shift against the actual change of the estimate) and the second-order
-    convergence of generalized-α (the second shift about 1/4 of the first)."""
+    the default 2 ms with the check on the step axis and no refinement budget. The check
+    finds that halving the step moves α by more than 0.3 SE and says so (the estimate is
+    flagged as biased). Reference: the truth of the data. Generalized-α is second
+    order, so the 2 ms estimate's bias is b(h) = C h² against the data's 0.5 ms
+    (C h²/16), and the predicted shift to 1 ms is b(h/2) − b(h) = −¾ C h²: the shift is
+    −0.8 × (estimate − truth), up to the noise (its standard error). The refinement loop
+    itself (refit at 1 ms, recheck within the limit, coverage over 20 seeds) is measured
+    in benchmarks/identification_coverage.py, as it needs two more compiled programs."""
     fine = plain.refined(step=4)
     _, clean = synthesize(fine, {"alpha": 0.02, "beta": 0.0}, noise=0.0, rate=RATE)
     t = np.arange(len(clean)) / RATE
@@ -192,21 +195,18 @@ def test_discretization_check_catches_step_bias_and_refinement_removes_it(plain)
     rec = Measurements.from_arrays(t, clean + sigma * np.random.default_rng(5).standard_normal(len(t)),
                                    source="finer step")
     res = fit(plain, rec, {"alpha": 0.01, "beta": 0.0}, free=("alpha",), noise=sigma, discretization=True,
-              refine_axes=("step",), refine_budget=2)
+              refine_axes=("step",), refine_budget=0)
     dz = res.discretization
     first = dz["rounds"][0]["checks"]["step"]
     assert first["max_shift_se"] > 0.3, first
-    assert dz["refined"] == [dict(step_divided_by=2, elements_multiplied_by=1, dt=1e-3, elements=ELEMENTS)]
-    assert dz["within_limit"] and dz["remaining_shift_se"] < 0.3 and dz["final_dt"] == 1e-3
+    assert dz["refined"] == [] and not dz["within_limit"] and dz["final_dt"] == 2e-3
+    assert any("refinement budget (0) is spent" in n for n in dz["notes"])
+    bias = res.estimates[0] - 0.02
     predicted = first["shift"]["alpha"]
-    actual = res.estimates[0] - dz["rounds"][0]["estimates"]["alpha"]
-    assert abs(actual - predicted) < 0.25 * abs(predicted), (actual, predicted)
-    second = dz["rounds"][1]["checks"]["step"]["shift"]["alpha"]
-    assert 0.15 < second / predicted < 0.4, (second, predicted)
-    assert abs(res.estimates[0] - 0.02) <= 3 * res.stderr[0]
-    assert "refined step /2" in res.summary() and res.dt == 1e-3
+    assert abs(predicted + 0.8 * bias) < 0.25 * abs(predicted) + 2 * res.stderr[0], (predicted, bias, res.stderr)
+    assert "ABOVE the limit" in res.summary() or "does not explain" in res.summary()
     d = res.to_dict()
-    assert d["discretization"]["final_dt"] == 1e-3 and d["dt"] == 1e-3
+    assert d["discretization"]["final_dt"] == 2e-3
     json.dumps(d)
 
 
