@@ -42,7 +42,8 @@ from .forces import (BeamMassLoad, BodyMassLoad, CompressionOnlySpringDamper, Po
 from .mesh import BeamMesh, pad
 from .newton import ModifiedNewton
 from .section import Section
-from .sliding import DEFAULT_REGULARIZATION, ConstantSpeed, SlidingDriveForce, SlidingFriction, SlidingServo
+from .functions import Constant
+from .sliding import DEFAULT_REGULARIZATION, SlidingDriveForce, SlidingFriction, SlidingServo
 from .system import State, System
 from .validation import (check_choice, check_finite, check_nonnegative, check_positive,
                          check_vector)
@@ -426,7 +427,7 @@ class Model:
         else:
             if not callable(speed):
                 u = float(check_finite(f"speed of drive {name!r}", speed))
-                speed = ConstantSpeed(u)
+                speed = Constant(u)
             a = dict(speed=speed, gain=check_positive(f"gain of drive {name!r}", gain, "N*s/m"),
                      max_force=check_positive(f"max_force of drive {name!r}", max_force, "N"))
         self._claim(name, "joint" if kind == "position" else "force")

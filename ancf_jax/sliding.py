@@ -47,26 +47,9 @@ from .points import SlidingPoint
 DEFAULT_REGULARIZATION = 1e-3
 
 
-class ConstantSpeed:
-    """u*(t) = value [m/s], hashable by value (a static field of :class:`SlidingServo`
-    that does not re-trigger compilation when a model is rebuilt)."""
-
-    def __init__(self, value: float):
-        self.value = float(value)
-
-    def __call__(self, t):
-        return jnp.full(jnp.shape(t), self.value)
-
-    def __eq__(self, other):
-        return isinstance(other, ConstantSpeed) and other.value == self.value
-
-    def __hash__(self):
-        return hash(("constant speed", self.value))
-
-
 def sliding_slope(system, beam: int, sliding: int, q):
     """r'(s) of beam ``beam`` at sliding coordinate ``sliding``, shape (2,)."""
-    return system.beams[beam].slope(system.beam_nodes(q, beam), system.sliding(q, sliding))
+    return SlidingPoint(beam, sliding).direction(system, q)
 
 
 def sliding_speed(system, beam: int, sliding: int, q, v):
@@ -149,8 +132,8 @@ class SlidingFriction(AbstractReactionForce):
         F = −μ N tanh(u / v_ε) − c u  [N],   N = |λ·n̂|,
 
     N the normal reaction of the joint (λ its multipliers, the force on the body; n̂ ⊥
-    r'(s)), u the sliding speed (:func:`sliding_speed`). Smooth in q, v and λ; its power
-    F u ≤ 0 is dissipation.
+    r'(s)), u the sliding speed (:func:`sliding_speed`). Smooth in q, v and λ except
+    where N passes through zero (|·|); its power F u ≤ 0 is dissipation.
 
     Attributes:
         joint: index of the sliding joint in the system's constraints (static).

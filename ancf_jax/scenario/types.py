@@ -16,6 +16,7 @@ import jax.numpy as jnp
 from pydantic import PlainValidator, ValidationInfo
 from pydantic_core import PydanticCustomError
 
+from ..functions import Constant
 from .expressions import ACCEPTED as EXPRESSION_SET
 from .expressions import ExpressionError, compile_expression
 from .tables import PATH_RULE, TableError, table_from_csv, table_from_rows
@@ -81,22 +82,6 @@ class TimeFunctionSpec:
         return self.function(t)
 
 
-class _Constant:
-    """f(t) = value (hashable by value)."""
-
-    def __init__(self, value: float):
-        self.value = float(value)
-
-    def __call__(self, t):
-        return jnp.full(jnp.shape(t), self.value)
-
-    def __eq__(self, other):
-        return isinstance(other, _Constant) and other.value == self.value
-
-    def __hash__(self):
-        return hash(("constant", self.value))
-
-
 TIME_FUNCTION_ACCEPTED = (f"an expression in t ({EXPRESSION_SET}), a number, "
                           "{ table = [[t, value], ...] } or { file = \"data.csv\" } "
                           f"({PATH_RULE})")
@@ -112,7 +97,7 @@ def _time_function(value, info: ValidationInfo):
     if _is_number(value):
         if not math.isfinite(value):
             raise _error("time_function", f"must be finite, got {value!r}")
-        return TimeFunctionSpec("constant", repr(float(value)), _Constant(value))
+        return TimeFunctionSpec("constant", repr(float(value)), Constant(value))
     if isinstance(value, dict) and len(value) == 1 and ("table" in value or "file" in value):
         try:
             if "table" in value:
