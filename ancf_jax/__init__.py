@@ -7,10 +7,16 @@ Using Absolute Nodal Coordinates" (planar ANCF beam, Eqs. 1–21) and goes beyon
 Importing the package turns on float64 in JAX: the stiff axial modes of a steel wire
 make float32 simulations diverge. It also turns on JAX's persistent compilation cache
 (``~/.cache/ancf_jax/xla``; ``ANCF_JAX_CACHE=0`` turns it off, see
-:mod:`ancf_jax._cache`), so a model compiled once starts at once in later processes.
+:mod:`ancf_jax._cache`), so a model compiled once starts at once in later processes,
+and adds XLA:CPU flags chosen by measurement to ``XLA_FLAGS`` (``ANCF_JAX_XLA_FLAGS=0``
+turns that off, see :mod:`ancf_jax._xla`).
 """
 
-import jax as _jax
+from ._xla import configure_xla_flags as _configure_xla_flags
+
+_configure_xla_flags()
+
+import jax as _jax  # noqa: E402
 
 _jax.config.update("jax_enable_x64", True)
 

@@ -196,7 +196,8 @@ def spawned(tmp_path_factory):
     from concurrent.futures import ProcessPoolExecutor
     tmp = tmp_path_factory.mktemp("spawned")
     old = os.environ.get("XLA_FLAGS")
-    os.environ["XLA_FLAGS"] = "--xla_force_host_platform_device_count=2"  # for the child only
+    # for the child only, with the suite's own flags (tests/conftest.py)
+    os.environ["XLA_FLAGS"] = f"{old or ''} --xla_force_host_platform_device_count=2".strip()
     try:
         pool = ProcessPoolExecutor(max_workers=1, mp_context=mp.get_context("spawn"))
         shard = pool.submit(_case, "sweep_sharded_across_two_host_devices", PARAMS, str(tmp / "two.zarr"), KW)

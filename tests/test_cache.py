@@ -27,3 +27,32 @@ def cache_dir_in_fresh_process(tmp_path, **env):
 def test_compilation_cache_setting(tmp_path, env, expected):
     env = {k: v.format(tmp=tmp_path) for k, v in env.items()}
     assert cache_dir_in_fresh_process(tmp_path, **env) == expected.format(tmp=tmp_path)
+
+
+# XLA flags added at import (ancf_jax/_xla.py): only where the user did not name them,
+# not when switched off, not once a backend runs; the process must then compute (an
+# unknown flag would abort it).
+FLAGS_CODE = ("{pre}import os, ancf_jax, jax, jax.numpy as jnp; float(jnp.ones(3).sum()); "
+              "print(repr(os.environ.get('XLA_FLAGS')), jax.device_count())")
+
+
+def flags_in_fresh_process(pre="", **env):
+    e = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "ANCF_JAX_XLA_FLAGS")}
+    e.update(JAX_PLATFORMS="cpu", **env)
+    out = subprocess.run([sys.executable, "-c", FLAGS_CODE.format(pre=pre)], env=e,
+                         capture_output=True, text=True, check=True)
+    return out.stdout.strip().splitlines()[-1]
+
+
+def test_xla_flags_setting():
+    from ancf_jax import _xla
+    default = " ".join(_xla.DEFAULT_FLAGS) if _xla._jaxlib_release() in _xla.TESTED_JAXLIB else None
+    two = "--xla_force_host_platform_device_count=2"
+    assert flags_in_fresh_process() == f"{default!r} 1"
+    assert flags_in_fresh_process(XLA_FLAGS=two) == f"{(two + ' ' + default) if default else two!r} 2"
+    if default:  # the user's own value of a default flag is kept
+        mine = default.replace("=false", "=true")
+        assert mine != default and flags_in_fresh_process(XLA_FLAGS=mine) == f"{mine!r} 1"
+    assert flags_in_fresh_process(ANCF_JAX_XLA_FLAGS="off") == "None 1"      # switched off
+    # a backend started before ancf_jax is imported: nothing changed (too late to act)
+    assert flags_in_fresh_process(pre="import jax; jax.devices(); ") == "None 1"
