@@ -18,7 +18,8 @@ def pytest_configure(config):
     # XLA compilation is most of the suite's time and the tests' runs are short: LLVM
     # without optimization passes compiles a simulation ~1.6x faster (M1 chunk program
     # 2.1 s -> 1.2 s) and runs it ~2x slower, with the same floating-point operations (no
-    # fast-math at any level), so the results are the same. Set before any JAX backend
+    # fast-math at any level): results the same to rounding (the 2 s M1 run: 1.1e-13 m
+    # in q, from other instruction orders; as across XLA releases). Set before any JAX backend
     # starts, and inherited by the subprocesses (CLI, notebooks, the sweep child suite).
     flags = os.environ.get("XLA_FLAGS", "")
     if "xla_backend_optimization_level" not in flags:
