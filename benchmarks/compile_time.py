@@ -1,7 +1,7 @@
 """Compile time of ancf_jax in a fresh process (no in-process or persistent cache).
 
 Measured in a child Python process (``JAX_COMPILATION_CACHE_DIR`` removed from its
-environment): M1 (6 elements, generalized-α defaults, h = 1 ms) through ``simulate``,
+environment, ``ANCF_JAX_CACHE=0``): M1 (6 elements, generalized-α defaults, h = 1 ms) through ``simulate``,
 and the three-mesh M2 batch (12, 18, 24 elements padded to 24, M2's run settings)
 through ``simulate_batch``. Reported: ``compile_time_s`` of the run (tracing, lowering
 and XLA compilation of the initial-state and chunk programs) and the wall time of the
@@ -94,7 +94,11 @@ def _m2_parts() -> dict:
 
 
 def measure(which: str) -> dict:
+    # no persistent cache in the child: neither JAX's setting nor the one ancf_jax turns
+    # on at import (a warm ~/.cache/ancf_jax/xla made the second child of a case read
+    # its programs from disk)
     env = {k: v for k, v in os.environ.items() if not k.startswith("JAX_COMPILATION_CACHE")}
+    env["ANCF_JAX_CACHE"] = "0"
     t0 = time.perf_counter()
     p = subprocess.run([sys.executable, "-m", "benchmarks.compile_time", "--child", which],
                        capture_output=True, text=True, env=env, cwd=os.path.dirname(os.path.dirname(__file__)))

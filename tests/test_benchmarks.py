@@ -24,7 +24,7 @@ def synthetic(tmp_path):
         (tmp_path / f"{name}.json").write_text(json.dumps({"stamp": STAMP, "quick": True,
                                                            "command": f"cmd {name}", **data}))
     single = []
-    for model, ratio in (("M1", 0.4), ("M2", 0.8)):
+    for model, ratio in (("M1", 0.3), ("M2", 0.8)):
         a, e = _chosen(1e-3, 2000, 0.4), _chosen(1e-3, 2000, 1.0)
         a["setup_s"] = 3.0
         single.append(dict(model=model, n_elements=6, t_end=2.0, tolerance=2e-4, error_measure="tip",
@@ -67,7 +67,7 @@ def synthetic(tmp_path):
                                           run_s=0.01 / dt * 1e-3, steps=int(0.05 / dt), compile_s=1.0)
                                      for dt in (1e-3, 5e-4)]))
     put("compile_time", dict(section="compile_time", m1=dict(compile_s=4.0, first_call_s=4.5),
-                             m2_batch=dict(compile_s=30.0, first_call_s=31.0), m2_counts=[12, 18, 24]))
+                             m2_batch=dict(compile_s=12.0, first_call_s=13.0), m2_counts=[12, 18, 24]))
     put("agreement", dict(section="agreement", exudyn=False, exudyn_missing="Exudyn disabled", rows=[],
                           error="RuntimeError: boom"))
 
