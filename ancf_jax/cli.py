@@ -318,7 +318,7 @@ def _check_size(args, scs, settings):
     the state size is counted from the scenario (4 per node, 3 per body, 1 per sliding
     joint)."""
     from .errors import ModelError
-    from .simulation import check_run_size
+    from .simulation import FIXED_STEP_SOLVERS, check_run_size
     names = dict(t_end="--t-end" if getattr(args, "t_end", None) is not None else "solver.t_end",
                  dt="--dt" if getattr(args, "dt", None) is not None else "solver.dt",
                  output_dt=("--output-dt" if getattr(args, "output_dt", None) is not None else "outputs.dt"),
@@ -328,7 +328,7 @@ def _check_size(args, scs, settings):
              + sum(j.type == "sliding" for j in sc.spec.joints.values()))
         try:
             check_run_size(settings.t_end, settings.dt, settings.output_dt, n, batch=len(scs),
-                           fixed_step=settings.solver in ("generalized-alpha", "rk4"),
+                           fixed_step=settings.solver in FIXED_STEP_SOLVERS,
                            max_steps=args.max_steps, names=names)
         except ModelError as e:
             raise _UsageError(str(e)) from None
@@ -374,11 +374,11 @@ def _simulate_all(scs, settings, kw) -> dict:
     """Simulate each scenario of ``scs`` ({label: Scenario}) with ``simulate`` keyword
     arguments ``kw``; several element counts of a fixed-step solver run as one padded,
     vmapped batch. Returns {label: Results}."""
-    from .simulation import simulate, simulate_batch
+    from .simulation import FIXED_STEP_SOLVERS, simulate, simulate_batch
     from .errors import ModelError
     labels = list(scs)
     try:
-        if len(labels) > 1 and settings.solver in ("generalized-alpha", "rk4"):
+        if len(labels) > 1 and settings.solver in FIXED_STEP_SOLVERS:
             n_max = max(labels)
             built = [scs[n].build(pad_to={next(iter(scs[n].beam_elements)): n_max}) for n in labels]
             return dict(zip(labels, simulate_batch([b[0] for b in built], [b[1] for b in built], **kw)))

@@ -15,6 +15,7 @@ Solvers (``solver=``):
 =====================  ==========================================================
 ``"generalized-alpha"``  implicit, index 3, second order (default; see below)
 ``"rk4"``                the paper's classical RK4 (explicit, fixed step, projection)
+``"explicit-euler"``     forward Euler (explicit, fixed step, first order; Exudyn parity)
 ``"tsit5"``, ``"dopri5"``  diffrax adaptive explicit, index-1 with Baumgarte
 ``"kvaerno5"``           diffrax adaptive implicit (ESDIRK), index-1 with Baumgarte
 =====================  ==========================================================
@@ -45,14 +46,16 @@ from .integrators.base import AbstractAdaptiveSolver, AbstractIntegrator, Abstra
 from .integrators.diffrax_solvers import KINDS as DIFFRAX_KINDS
 from .integrators.diffrax_solvers import DiffraxSolver
 from .integrators.generalized_alpha import GeneralizedAlpha
-from .integrators.rk4 import RK4
+from .integrators.explicit import RK4, ExplicitEuler
 from .linalg import LINEAR_SOLVERS
 from .newton import ModifiedNewton
 from .results import Results
 from .system import State, System
 from .validation import check_positive
 
-SOLVERS = ("generalized-alpha", "rk4") + DIFFRAX_KINDS
+#: the fixed-step solvers (run by the one time loop, batched and differentiable)
+FIXED_STEP_SOLVERS = ("generalized-alpha", "rk4", "explicit-euler")
+SOLVERS = FIXED_STEP_SOLVERS + DIFFRAX_KINDS
 DEFAULT_SOLVER = "generalized-alpha"
 
 
@@ -90,6 +93,8 @@ def make_solver(name: str, **options):
         options["linear_solver"] = ls
     if name == "rk4":
         return RK4(**options)
+    if name == "explicit-euler":
+        return ExplicitEuler(**options)
     return DiffraxSolver(kind=name, **options)
 
 
@@ -541,7 +546,7 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
         t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings, on_failure,
         chunks, solver_options, batched=True)
     if not isinstance(solver, AbstractIntegrator):
-        raise ModelError("simulate_batch runs fixed-step solvers (generalized-alpha, rk4)")
+        raise ModelError(f"simulate_batch runs fixed-step solvers ({', '.join(FIXED_STEP_SOLVERS)})")
     t0s = {float(s.t) for s in states}
     if len(t0s) != 1:
         raise ModelError("simulate_batch needs a common start time")

@@ -732,8 +732,11 @@ def run(model: ExudynModel, *, t_end: float, dt: float, output_dt: float | None 
         rho_inf: float = 0.9, relative_tolerance: float = 1e-8, absolute_tolerance: float = 1e-10,
         modified_newton: bool = True, max_iterations: int = 25, linear_solver: str = "EXUdense",
         discontinuous_tolerance: float = 1e-12, threads: int = 1, on_failure: str = "raise",
-        verbose: int = 0) -> ExudynRun:
-    """Integrate an :class:`ExudynModel` with Exudyn's generalized-α (index 3).
+        verbose: int = 0, solver_type: str = "GeneralizedAlpha") -> ExudynRun:
+    """Integrate an :class:`ExudynModel` with Exudyn's generalized-α (index 3), or the
+    explicit solver named by ``solver_type`` (an ``exudyn.DynamicSolverType``, e.g.
+    ``"ExplicitEuler"``, ``"RK44"``: constraints to the ground eliminated, Exudyn's
+    default for explicit solvers; the Newton settings then do not apply).
 
     The step and output grid are those of :func:`ancf_jax.simulation.time_grid` for the
     same ``t_end``, ``dt``, ``output_dt`` (identical steps in both codes). A model runs
@@ -760,7 +763,7 @@ def run(model: ExudynModel, *, t_end: float, dt: float, output_dt: float | None 
                     relative_tolerance=relative_tolerance, absolute_tolerance=absolute_tolerance,
                     modified_newton=modified_newton, max_iterations=max_iterations,
                     linear_solver=linear_solver, discontinuous_tolerance=discontinuous_tolerance,
-                    threads=threads, integration=model.integration)
+                    threads=threads, integration=model.integration, solver_type=solver_type)
     ss = simulation_settings(t_end=n_steps * h, h=h, n_steps=n_steps, output_dt=out_dt,
                              rho_inf=rho_inf, relative_tolerance=relative_tolerance,
                              absolute_tolerance=absolute_tolerance, modified_newton=modified_newton,
@@ -771,7 +774,8 @@ def run(model: ExudynModel, *, t_end: float, dt: float, output_dt: float | None 
     status, message = "ok", ""
     t0 = time.perf_counter()
     try:
-        ok = mbs.SolveDynamic(ss, storeSolver=True, showHints=bool(verbose))
+        ok = mbs.SolveDynamic(ss, solverType=getattr(exu.DynamicSolverType, solver_type),
+                              storeSolver=True, showHints=bool(verbose))
         if not ok:
             status, message = "failed", "SolveDynamic returned False"
     except Exception as err:  # exudyn raises SolverError on failure

@@ -349,3 +349,44 @@ def from_exudyn_eigenvalues():
     # on the lowest mode (3e-7 1/s², 2e-16 of max ω²), 1e-13 on the higher ones
     print("eigenvalues rel. difference", np.abs(w**2 - ref) / ref, "max omega^2", values[-1])
     np.testing.assert_allclose(w**2, ref, rtol=1e-9, atol=1e-14 * values[-1])
+
+
+def explicit_solvers_match_exudyn():
+    """ancf_jax's explicit Euler and RK4 against Exudyn's ``ExplicitEuler`` and
+    ``RK44`` on a free 4-element cable (EA = 1e4 N, EI = 2 N·m², ρA = 0.5 kg/m) spinning
+    at 10 rad/s about its middle under gravity, 0.05 s at h = 10 µs (5,000 steps), the
+    same initial state: tip positions agree to 1e-12 m (measured 8.5e-15 m Euler,
+    1.7e-15 m RK4). Negative control: explicit Euler against Exudyn's RK44 differs by
+    the first-order error, > 1e-6 m. (Exudyn's explicit solvers are for systems
+    without constraints, or with constraints of coordinates to the ground; with the
+    Exudyn clamp they gave a tip 1.3e-3 m from both codes' generalized-α runs, which
+    agree to 5e-12 m: not compared here.)"""
+    import equinox as eqx
+    from ancf_jax import mesh
+    from ancf_jax.model import Model
+    from ancf_jax.section import Section
+    from ancf_jax.simulation import simulate
+
+    m = Model(gravity=(0.0, -9.81))
+    m.add_beam("beam", mesh.straight((0.0, 0.0), (1.0, 0.0), 1.0, 4),
+               Section.from_stiffness(1.0e4, 2.0, 0.5), formulation=em.exudyn_formulation(0))
+    system, state = m.build(assemble=False)
+    q, w = np.asarray(state.q).reshape(-1, 4), 10.0
+    v = np.stack([-w * q[:, 1], w * (q[:, 0] - 0.5), -w * q[:, 3], w * q[:, 2]], 1).ravel()
+    state = eqx.tree_at(lambda s: s.v, state, jnp.asarray(v))
+    kw = dict(t_end=0.05, dt=1e-5, output_dt=0.01)
+
+    def exudyn_tip(kind):
+        r = em.run(em.build_exudyn(system, state, name="M1"), solver_type=kind, **kw)
+        assert r.status == "ok"
+        return r.outputs["tip"]
+
+    exudyn = {kind: exudyn_tip(kind) for kind in ("ExplicitEuler", "RK44")}
+    for name, kind in (("explicit-euler", "ExplicitEuler"), ("rk4", "RK44")):
+        res = simulate(system, state, solver=name, progress=False, **kw)
+        assert res.status == "ok"
+        tip = np.asarray(res.node("beam", -1))[:, :2]
+        assert np.ptp(tip[:, 1]) > 0.1  # it moved
+        assert np.max(np.linalg.norm(tip - exudyn[kind], axis=1)) < 1e-12, name
+        if name == "explicit-euler":
+            assert np.max(np.linalg.norm(tip - exudyn["RK44"], axis=1)) > 1e-6

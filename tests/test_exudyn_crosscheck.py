@@ -65,3 +65,7 @@ def test_from_exudyn_matches_exudyn(exudyn_process):
 
 def test_from_exudyn_eigenvalues_match_exudyn(exudyn_process):
     run_case(exudyn_process, "from_exudyn_eigenvalues")
+
+
+def test_explicit_solvers_match_exudyn(exudyn_process):
+    run_case(exudyn_process, "explicit_solvers_match_exudyn")

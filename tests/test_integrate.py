@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from ancf_jax.integrate import RunOptions
-from ancf_jax.integrators.rk4 import RK4
+from ancf_jax.integrators.explicit import RK4
 
 from .dynamics import curve_motion, observed_orders, run_fixed, track_model, uneven_arc
 

@@ -17,7 +17,7 @@ from scipy.integrate import solve_ivp
 
 from ancf_jax import dae, mesh
 from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
-from ancf_jax.integrators.rk4 import RK4
+from ancf_jax.integrators.explicit import RK4
 
 from .dynamics import G, curve_motion, hermite_point, run_fixed, track_model, uneven_arc
 

@@ -11,7 +11,7 @@ from scipy.special import ellipk
 
 from ancf_jax import SimulationError, mesh
 from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
-from ancf_jax.integrators.rk4 import RK4
+from ancf_jax.integrators.explicit import RK4
 from ancf_jax.models.m1 import m1_model
 from ancf_jax.simulation import simulate, trajectory
 

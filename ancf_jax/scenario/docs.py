@@ -56,7 +56,7 @@ TABLES = [
     ("`[modal]`", S.ModalSpec),
     ("`[solver]`", S.SolverSpec),
     ("`[solver.generalized_alpha]`", S.GeneralizedAlphaOptions),
-    ("`[solver.rk4]`", S.RK4Options),
+    ("`[solver.rk4]`, `[solver.explicit_euler]`", S.ExplicitOptions),
     ("`[solver.diffrax]`", S.DiffraxOptions),
     ("`[outputs]`", S.OutputsSpec),
     ('`[outputs.columns.NAME]` with `type = "node"`', S.NodeOutput),

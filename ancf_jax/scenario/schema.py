@@ -25,7 +25,7 @@ from ..outputs import COMPONENTS
 from ..integrate import DEFAULT_DT, RunOptions
 from ..integrators.diffrax_solvers import DiffraxSolver
 from ..integrators.generalized_alpha import GeneralizedAlpha
-from ..integrators.rk4 import RK4
+from ..integrators.explicit import RK4
 from ..newton import ModifiedNewton
 from ..simulation import SOLVERS
 from .types import Nodes4, Points2, Quadrature, TimeFunction, Vec2
@@ -469,8 +469,8 @@ class GeneralizedAlphaOptions(Table):
     linear_solver: Optional[Literal["auto", "bordered", "dense"]] = key(None, doc=LINEAR_SOLVER_DOC)
 
 
-class RK4Options(Table):
-    """Options of the RK4 solver."""
+class ExplicitOptions(Table):
+    """Options of the explicit solvers (rk4, explicit-euler; the same defaults)."""
 
     projection: Optional[bool] = key(None, doc="project onto the constraints after each step "
                                      f"(default {_default(RK4, 'projection')})")
@@ -494,7 +494,8 @@ class DiffraxOptions(Table):
 
 
 #: the options table that applies to each solver (the others are checked, not used)
-SOLVER_TABLES = {"generalized-alpha": "generalized_alpha", "rk4": "rk4", "tsit5": "diffrax",
+SOLVER_TABLES = {"generalized-alpha": "generalized_alpha", "rk4": "rk4",
+                 "explicit-euler": "explicit_euler", "tsit5": "diffrax",
                  "dopri5": "diffrax", "kvaerno5": "diffrax"}
 
 
@@ -512,7 +513,8 @@ class SolverSpec(Table):
     locate_crossings: bool = key(RunOptions.locate_crossings, doc="split steps at node crossings of sliding joints")
     generalized_alpha: GeneralizedAlphaOptions = key(GeneralizedAlphaOptions(),
                                                      doc="options used when name = generalized-alpha")
-    rk4: RK4Options = key(RK4Options(), doc="options used when name = rk4")
+    rk4: ExplicitOptions = key(ExplicitOptions(), doc="options used when name = rk4")
+    explicit_euler: ExplicitOptions = key(ExplicitOptions(), doc="options used when name = explicit-euler")
     diffrax: DiffraxOptions = key(DiffraxOptions(), doc="options used when name = tsit5, dopri5 or kvaerno5")
 
 

@@ -24,7 +24,7 @@ import numpy as np
 from .._version import __version__
 from ..errors import ModelError
 from ..scenario import ScenarioError, load_scenario
-from ..simulation import time_grid
+from ..simulation import FIXED_STEP_SOLVERS, time_grid
 from .design import Param, SweepError, make_design, override
 
 #: default memory budget of one chunk's histories [bytes]
@@ -142,9 +142,9 @@ def plan(definition: SweepDefinition, *, chunk_size: int | None = None, workers:
     """
     d = definition
     base = _load(d.model, d.overrides)
-    if base.solver.solver not in ("generalized-alpha", "rk4"):
+    if base.solver.solver not in FIXED_STEP_SOLVERS:
         raise SweepError(f"solver.name: sweeps run fixed-step solvers in vmapped chunks, got "
-                         f"{base.solver.solver!r} (accepted: generalized-alpha, rk4)")
+                         f"{base.solver.solver!r} (accepted: {', '.join(FIXED_STEP_SOLVERS)})")
     outputs = [o.name for o in base.outputs]
     if not outputs:
         raise SweepError(f"{d.model}: the scenario names no outputs (accepted: a scenario with "

@@ -6,7 +6,7 @@ import pytest
 
 from ancf_jax.integrators.diffrax_solvers import DiffraxSolver
 from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
-from ancf_jax.integrators.rk4 import RK4
+from ancf_jax.integrators.explicit import RK4, ExplicitEuler
 from ancf_jax.scenario import docs, schema
 from ancf_jax.scenario.expressions import FUNCTIONS
 from ancf_jax.errors import ModelError
@@ -37,7 +37,7 @@ def test_every_table_and_key_is_documented():
 
 
 def test_solver_options_are_options_of_the_solvers():
-    classes = {"generalized-alpha": GeneralizedAlpha, "rk4": RK4, "tsit5": DiffraxSolver,
+    classes = {"generalized-alpha": GeneralizedAlpha, "rk4": RK4, "explicit-euler": ExplicitEuler, "tsit5": DiffraxSolver,
                "dopri5": DiffraxSolver, "kvaerno5": DiffraxSolver}
     assert set(schema.SOLVER_TABLES) == set(classes)
     for name, table in schema.SOLVER_TABLES.items():

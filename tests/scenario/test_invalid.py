@@ -120,7 +120,7 @@ CASES = [
     ("two mass keys", replaced(("density = 7800.0", "density = 7800.0\nmass = 0.78")), "beams.arm.section.mass",
      "one of mass_per_length, density, mass"),
     ("solver option at the wrong level", replaced(('name = "generalized-alpha"', 'name = "generalized-alpha"\nrho_inf = 0.5')),
-     "solver.rho_inf", "keys name, dt, t_end, drift_tolerance, locate_crossings, generalized_alpha, rk4, diffrax"),
+     "solver.rho_inf", "keys name, dt, t_end, drift_tolerance, locate_crossings, generalized_alpha, rk4, explicit_euler, diffrax"),
     ("option of another solver", added("[solver.rk4]\nrho_inf = 0.5"), "solver.rk4.rho_inf", "keys projection, baumgarte, linear_solver"),
     ("rho_inf out of range", added("[solver.generalized_alpha]\nrho_inf = 1.5"),
      "solver.generalized_alpha.rho_inf", "a number 0 .. 1"),
