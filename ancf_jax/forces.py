@@ -371,3 +371,25 @@ class CompressionOnlySpringDamper(AbstractOneSidedSpringDamper):
     :class:`AbstractOneSidedSpringDamper`)."""
 
     sense: ClassVar[float] = -1.0
+
+
+def kink_values(system, q, v):
+    """Values whose zero crossings are the kinks of the force laws of ``system``, shape
+    (2k,), or None when the system has none. For each one-sided spring-damper, with
+    x = σ(ℓ − ℓ₀):
+
+    * x [m]: slack/taut (open/closed); the stiffness jumps from 0 to k there, and a
+      damped member's force jumps by c σℓ̇ when it engages;
+    * k x + c σℓ̇ [N] while x > 0, else k x: the force limit of the damper (a taut
+      member retracting fast reaches zero force before x does, and stays at zero).
+
+    Fixed steps are split at their crossings by ``locate_crossings``
+    (:mod:`ancf_jax.integrate`)."""
+    members = [f for f in system.forces if isinstance(f, AbstractOneSidedSpringDamper)]
+    if not members:
+        return None
+    out = []
+    for f in members:
+        x, ell_dot = jax.jvp(lambda qq: f.sense * (f.length(system, qq) - f.rest_length), (q,), (v,))
+        out += [x, jnp.where(x > 0.0, f.stiffness * x + f.damping * ell_dot, f.stiffness * x)]
+    return jnp.stack(out)

@@ -17,13 +17,15 @@ failure). After
 the first failure the state is frozen at the last good step and the failure time is
 recorded; :mod:`ancf_jax.simulation` turns that into an error.
 
-Node crossings of sliding joints. The curvature of the cubic interpolation jumps at
-nodes, so the acceleration and the joint reaction jump when a sliding joint crosses
-one; a fixed step that straddles the crossing loses order. With
-``locate_crossings=True`` a step that changes the element of a sliding coordinate is
-split: the crossing fraction θ is found by regula falsi (Illinois) on
-θ ↦ s(step(θ h)) − s_node, the step is taken to just past the node and then
-completed. (Crossing location and step retries are solver internals written as while
+Node crossings of sliding joints and kinks of force laws. The curvature of the cubic
+interpolation jumps at nodes, so the acceleration and the joint reaction jump when a
+sliding joint crosses one; the stiffness of a one-sided spring-damper jumps from 0 to k
+when it goes taut (:func:`ancf_jax.forces.kink_values`). A fixed step that straddles
+such a point loses order. With ``locate_crossings=True`` a step that changes the
+element of a sliding coordinate, or the sign of a kink value, is split at the first of
+them: the crossing fraction θ is found by regula falsi (Illinois) on
+θ ↦ g(step(θ h)) − g*, g the sliding coordinate (g* the node) or the kink value
+(g* = 0), the step is taken to just past the crossing and then completed. (Crossing location and step retries are solver internals written as while
 loops; gradients by reverse mode need both off, which is the default of
 :func:`ancf_jax.simulation.trajectory`.) The crossing search is written here rather
 than taken from optimistix: its only bracketing root finder is bisection, which gains
@@ -38,6 +40,7 @@ import jax
 import jax.numpy as jnp
 
 from .failures import Failure
+from .forces import kink_values
 from .integrators.base import AbstractIntegrator, Carry, StepInfo
 from ._control import run_if
 from .joints import SlidingJoint
@@ -52,6 +55,15 @@ DEFAULT_DT = 1e-3
 #: core :func:`~ancf_jax.simulation.trajectory` runs without retries, RunOptions' 0)
 DEFAULT_HALVINGS = 6
 
+#: a located kink of a force law ends the first substep this fraction of the step's
+#: change of the kink value before the kink. A damped one-sided member's force jumps by
+#: c σℓ̇ when it engages, and implicit steps ending within ~(jump/m)·(θh)² of the jump
+#: have no solution (Newton fails: measured on tests/test_cable_machinery.py's rope, a
+#: band of 4e-7 m at h = 1 ms); the margin grows with h, the band with h², so 1e-2 holds
+#: for steps up to ~40 ms there. Measured effect on the undamped rope's error against
+#: the exact answer: orders 2.05, 2.07, 2.00 at h = 4 to 0.5 ms (1e-3: 1.99, 2.02, 1.97)
+KINK_MARGIN = 1e-2
+
 
 class RunOptions(eqx.Module):
     """Static options of a run (their defaults are the defaults of simulate, the
@@ -59,7 +71,8 @@ class RunOptions(eqx.Module):
 
     Attributes:
         drift_tolerance: largest accepted constraint violation max|Φ| [m] (and rad).
-        locate_crossings: split steps at node crossings of sliding joints.
+        locate_crossings: split steps at node crossings of sliding joints and at
+            slack/taut transitions of one-sided spring-dampers.
         crossing_iterations: regula-falsi iterations to locate a crossing.
         max_halvings: when a step fails (Newton not converged, non-finite state,
             sliding jump), redo it in substeps, halving down to h / 2^max_halvings and
@@ -89,7 +102,7 @@ class Segment(eqx.Module):
         work: work integrals [J].
         iterations: Newton iterations in the interval (sum over steps).
         max_iterations: largest Newton iteration count of a step in the interval.
-        crossings: node crossings located in the interval.
+        crossings: node crossings and kinks located in the interval.
     """
 
     t: jnp.ndarray
@@ -178,29 +191,48 @@ def step_status(system: System, old: Carry | None, new: Carry, converged, option
 
 
 def _crossing(system, integrator, carry, new, h, context, options):
-    """Split a step at the first node crossing of a sliding joint (see module doc).
+    """Split a step at the first node crossing of a sliding joint or kink of a force
+    law (see module doc).
 
     Returns (carry, StepInfo, crossed) for the completed step of size h."""
     slides = sliding_beams(system)
-    if not options.locate_crossings or not slides:
+    kinked = kink_values(system, carry.q, carry.v) is not None
+    if not options.locate_crossings or not (slides or kinked):
         return new, None, jnp.array(False)
     js = list(slides)
-    s0 = jnp.stack([system.sliding(carry.q, j) for j in js])
-    s1 = jnp.stack([system.sliding(new.q, j) for j in js])
-    k0 = jnp.stack([system.beams[slides[j]].mesh.locate(s0[i])[0] for i, j in enumerate(js)])
-    k1 = jnp.stack([system.beams[slides[j]].mesh.locate(s1[i])[0] for i, j in enumerate(js)])
-    crossed = k0 != k1
-    nodes = jnp.stack([system.beams[slides[j]].mesh.node_arc_lengths[
-        jnp.where(k1[i] > k0[i], k0[i] + 1, k0[i])] for i, j in enumerate(js)])
-    direction = jnp.sign(s1 - s0)
-    lengths = jnp.stack([system.beams[slides[j]].mesh.element_lengths[k0[i]] for i, j in enumerate(js)])
-    target = nodes + direction * 1e-9 * lengths
-    theta_lin = jnp.clip((target - s0) / jnp.where(s1 != s0, s1 - s0, 1.0), 0.0, 1.0)
+
+    def values(c):
+        """The watched values g: sliding coordinates, then kink values."""
+        parts = [jnp.stack([system.sliding(c.q, j) for j in js])] if js else []
+        return jnp.concatenate(parts + ([kink_values(system, c.q, c.v)] if kinked else []))
+
+    g0, g1 = values(carry), values(new)
+    targets, crossings, kinks = [], [], []
+    if js:
+        s0, s1 = g0[:len(js)], g1[:len(js)]
+        k0 = jnp.stack([system.beams[slides[j]].mesh.locate(s0[i])[0] for i, j in enumerate(js)])
+        k1 = jnp.stack([system.beams[slides[j]].mesh.locate(s1[i])[0] for i, j in enumerate(js)])
+        nodes = jnp.stack([system.beams[slides[j]].mesh.node_arc_lengths[
+            jnp.where(k1[i] > k0[i], k0[i] + 1, k0[i])] for i, j in enumerate(js)])
+        lengths = jnp.stack([system.beams[slides[j]].mesh.element_lengths[k0[i]] for i, j in enumerate(js)])
+        targets.append(nodes + jnp.sign(s1 - s0) * 1e-9 * lengths)
+        crossings.append(k0 != k1)
+        kinks.append(jnp.zeros(len(js), bool))
+    if kinked:
+        e0, e1 = g0[len(js):], g1[len(js):]
+        # just before the kink (KINK_MARGIN): the first substep ends on the side where
+        # the law is smooth; the second straddles the kink by that margin. A value
+        # exactly zero at the start (a rope just taut) is no crossing.
+        targets.append(-jnp.sign(e1) * KINK_MARGIN * jnp.abs(e1 - e0))
+        crossings.append(e0 * e1 < 0.0)
+        kinks.append(jnp.ones(e0.shape, bool))
+    target, crossed = jnp.concatenate(targets), jnp.concatenate(crossings)
+    before_kink = jnp.concatenate(kinks)
+    theta_lin = jnp.clip((target - g0) / jnp.where(g1 != g0, g1 - g0, 1.0), 0.0, 1.0)
     first = jnp.argmin(jnp.where(crossed, theta_lin, 2.0))
-    jsel = jnp.asarray(js)[first]
 
     def s_of(c):
-        return jnp.stack([system.sliding(c.q, j) for j in js])[first]
+        return values(c)[first]
 
     def branch():
         tgt = target[first]
@@ -208,7 +240,7 @@ def _crossing(system, integrator, carry, new, h, context, options):
         # Illinois regula falsi on θ ∈ (0, 1) (f(0) and f(1) bracket the root), then the
         # two substeps θh and (1 − θ)h, all in one loop: the integrator's step is traced
         # and compiled once here instead of twice
-        fa, fb = s0[first] - tgt, s1[first] - tgt
+        fa, fb = g0[first] - tgt, g1[first] - tgt
         n_iter = options.crossing_iterations
 
         def body(k, st):
@@ -216,7 +248,9 @@ def _crossing(system, integrator, carry, new, h, context, options):
             bracketing = k < n_iter
             theta_rf = jnp.clip((a * fb - b * fa) / jnp.where(fb != fa, fb - fa, 1.0), 1e-6, 1 - 1e-6)
             # after the bracketing iterations: the best end of the bracket
-            theta_best = jnp.clip(jnp.where(jnp.abs(fa) < jnp.abs(fb), a, b), 1e-6, 1.0 - 1e-6)
+            # (for a kink: the end before it, a, see above)
+            theta_best = jnp.clip(jnp.where((jnp.abs(fa) < jnp.abs(fb)) | before_kink[first], a, b),
+                                  1e-6, 1.0 - 1e-6)
             theta = jnp.where(bracketing, theta_rf, jnp.where(k == n_iter, theta_best, theta))
             second = k > n_iter
             start = jax.tree.map(lambda m, c: jnp.where(second, m, c), mid, carry)
@@ -241,7 +275,6 @@ def _crossing(system, integrator, carry, new, h, context, options):
         st = jax.lax.fori_loop(0, n_iter + 2, body, init)
         return st[7], st[8], st[9]
 
-    del jsel
     out, iters, conv = run_if(jnp.any(crossed), lambda _: branch(),
                               (new, jnp.zeros((), jnp.int32), jnp.array(True)))
     return out, (iters, conv), jnp.any(crossed)

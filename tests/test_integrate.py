@@ -1,4 +1,5 @@
-"""The fixed-step time loop: node crossings of sliding joints.
+"""The fixed-step time loop: node crossings of sliding joints (the kinks of one-sided
+members: tests/test_cable_machinery.py).
 
 r'' of the cubic interpolation jumps at the nodes, so the accelerations jump when a
 sliding joint crosses one and a fixed step that straddles the crossing loses the
