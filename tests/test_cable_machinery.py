@@ -157,8 +157,8 @@ def test_located_slack_taut_transitions_restore_second_order(rope_runs):
     (3.4e-5, 1.1e-5, 4.1e-6 J against 6.0e-4, 3.1e-4, 5.1e-5 J). The damped rope (its
     force jumps by c·ℓ̇ when it engages) runs through its nine located transitions; its
     height error stays erratic, ~first order (measured 5.4e-4, 4.8e-4, 3.0e-4 m with
-    location, 6.7e-4, 5.4e-4, 1.3e-4 m without): generalized-α's acceleration recursion
-    carries the jump into the next steps."""
+    location, 6.7e-4, 5.4e-4, 1.3e-4 m without): the second substep straddles the force
+    jump by KINK_MARGIN of the step (docs/cable-machinery.md)."""
     located = RunOptions(locate_crossings=True)
     steps = (0.002, 0.001, 0.0005)
     errors, balances = [], []
