@@ -4,6 +4,12 @@ An :class:`Output` names one scalar history computed from a
 :class:`~ancf_jax.results.Results`: a coordinate of a beam node or material point, a
 body pose, a sliding coordinate, a bending stress, a joint reaction or an energy. The
 built-in models (M1, M2) and scenario files describe their CSV columns with these.
+
+Positions (node, point, body, sliding and sliding-point outputs) can be asked for as
+their time derivatives (``derivative`` 1: velocity, 2: acceleration, e.g. an
+accelerometer): with y = f(q), ẏ = f_q q̇ and ÿ = f_q q̈ + (f_q q̇)_q q̇, by forward-mode
+autodiff of the same f (:func:`output_value`, traceable, also used by the fits of
+:mod:`ancf_jax.identification`), from the run's q, q̇ and q̈.
 """
 
 from __future__ import annotations
@@ -13,10 +19,13 @@ import csv
 from pathlib import Path
 from typing import Iterable, Optional
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
 from .errors import ModelError
 from .results import Results
+from .system import System
 
 KINDS = ("node", "point", "body", "sliding", "sliding_point", "stress", "reaction", "energy", "member",
          "friction", "drive")
@@ -34,6 +43,13 @@ COMPONENTS = {
     "energy": ("kinetic", "gravity", "strain", "springs", "dissipated", "external", "constraint",
                "total", "balance_error"),
 }
+#: kinds that are functions of the coordinates alone (traceable by :func:`output_value`;
+#: the outputs a fit can use)
+POSITION_KINDS = ("node", "point", "body", "sliding", "sliding_point", "stress")
+#: kinds whose time derivatives are outputs too (``Output.derivative``)
+DIFFERENTIABLE_KINDS = ("node", "point", "body", "sliding", "sliding_point")
+#: names of ``Output.derivative`` 0, 1, 2 (scenario key ``derivative``)
+DERIVATIVES = ("position", "velocity", "acceleration")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -59,6 +75,8 @@ class Output:
         measure: curvature measure of a stress (``"exact"``, ``"small_strain"``).
         local: body-frame point [m] (``"body"``, components x, y): its position instead
             of the centre's.
+        derivative: 0 (default): the value; 1: its velocity; 2: its acceleration
+            [unit/s, unit/s²] (kinds in :data:`DIFFERENTIABLE_KINDS`).
     """
 
     name: str
@@ -72,6 +90,7 @@ class Output:
     fibre: Optional[float] = None
     measure: str = "exact"
     local: Optional[tuple] = None
+    derivative: int = 0
 
     def __post_init__(self):
         if self.kind not in KINDS:
@@ -81,6 +100,66 @@ class Output:
             raise ModelError(f"output {self.name!r}: component of a {self.kind} output must be one of "
                              f"{COMPONENTS[self.kind]}, got {self.component!r}")
         object.__setattr__(self, "component", comp)
+        if isinstance(self.derivative, bool) or self.derivative not in (0, 1, 2):
+            raise ModelError(f"output {self.name!r}: derivative must be 0, 1 or 2 ({', '.join(DERIVATIVES)}), "
+                             f"got {self.derivative!r}")
+        if self.derivative and self.kind not in DIFFERENTIABLE_KINDS:
+            raise ModelError(f"output {self.name!r}: a {self.kind} output has no derivative output; "
+                             f"derivatives exist for {', '.join(DIFFERENTIABLE_KINDS)}")
+
+
+def position_value(system: System, output: Output, q):
+    """Value of an output of a kind in :data:`POSITION_KINDS` at coordinates q
+    (traceable; ``output.derivative`` is ignored here)."""
+    kind, comp = output.kind, output.component
+    if kind == "node":
+        b = system.beam_names.index(output.target)
+        i = -1 if output.node is None else output.node
+        if i < 0:  # from the last active node (n_elements is array data: meshes may be padded)
+            i = system.beams[b].mesh.n_elements + 1 + i
+        return system.beam_nodes(q, b)[i, COMPONENTS["node"].index(comp)]
+    if kind == "point":
+        b = system.beam_names.index(output.target)
+        return system.beams[b].position(system.beam_nodes(q, b), float(output.s))["xy".index(comp)]
+    if kind == "body":
+        k = system.body_names.index(output.target)
+        pose = system.body_pose(q, k)
+        if output.local is not None and comp != "theta":
+            c, s = jnp.cos(pose[2]), jnp.sin(pose[2])
+            lx, ly = output.local
+            return pose[0] + c * lx - s * ly if comp == "x" else pose[1] + s * lx + c * ly
+        return pose["x y theta".split().index(comp)]
+    if kind == "sliding":
+        return system.sliding(q, system.sliding_names.index(output.target))
+    if kind == "sliding_point":
+        from .joints import SlidingJoint
+        joint = next(c for c in system.constraints if isinstance(c, SlidingJoint) and c.name == output.target)
+        s = system.sliding(q, joint.sliding)
+        return system.beams[joint.beam].position(system.beam_nodes(q, joint.beam), s)["xy".index(comp)]
+    if kind != "stress":
+        raise ModelError(f"output {output.name!r}: a {kind} output is not a function of the coordinates "
+                         f"alone ({', '.join(POSITION_KINDS)} are)")
+    b = system.beam_names.index(output.target)
+    beam, nodes = system.beams[b], system.beam_nodes(q, b)
+    if output.element is not None:
+        return beam.element_stress(nodes, output.element, 0.5 if output.xi is None else output.xi,
+                                   output.fibre, output.measure)
+    return beam.stress(nodes, float(output.s), output.fibre, output.measure)
+
+
+def output_value(system: System, output: Output, q, v=None, acc=None):
+    """Value of an output (kinds in :data:`POSITION_KINDS`) or of its time derivative
+    (``output.derivative``) at coordinates q, velocities v and accelerations acc, each
+    shape (n,) (traceable): y = f(q), ẏ = f_q v, ÿ = f_q acc + (f_q v)_q v."""
+    def f(qq):
+        return position_value(system, output, qq)
+
+    if output.derivative == 0:
+        return f(q)
+    if output.derivative == 1:
+        return jax.jvp(f, (q,), (v,))[1]
+    rate = lambda qq: jax.jvp(f, (qq,), (v,))[1]  # noqa: E731
+    return jax.jvp(rate, (q,), (v,))[1] + jax.jvp(f, (q,), (acc,))[1]
 
 
 def evaluate(results: Results, outputs: Iterable[Output]) -> dict[str, np.ndarray]:
@@ -88,7 +167,10 @@ def evaluate(results: Results, outputs: Iterable[Output]) -> dict[str, np.ndarra
     out = {"t": np.asarray(results.t)}
     energy = None
     for o in outputs:
-        if o.kind == "node":
+        if o.derivative:
+            f = jax.jit(jax.vmap(lambda q, v, a, o=o: output_value(results.system, o, q, v, a)))
+            val = f(jnp.asarray(results.q), jnp.asarray(results.v), jnp.asarray(results.acc))
+        elif o.kind == "node":
             col = "x y slope_x slope_y".split().index(o.component)
             val = results.node(o.target, -1 if o.node is None else o.node)[:, col]
         elif o.kind == "point":

@@ -44,14 +44,15 @@ import numpy as np
 from ..errors import ModelError
 from ..failures import Failure
 from ..integrators.base import AbstractIntegrator
-from ..outputs import COMPONENTS, Output
+from ..outputs import POSITION_KINDS, Output, output_value
 from ..simulation import compiled, make_solver, trajectory
 from ..system import State, System
 from . import parameters as P
 from .data import DataError, Measurements
 
-#: output kinds that are functions of the coordinates alone (fittable)
-FITTABLE_KINDS = ("node", "point", "body", "sliding", "sliding_point", "stress")
+#: output kinds that are functions of the coordinates alone (fittable; their velocities
+#: and accelerations too, ``Output.derivative``)
+FITTABLE_KINDS = POSITION_KINDS
 #: nuisance parameters of a measurement (Eq. M of :func:`measured`), in this order
 NUISANCE = ("time_offset", "offset", "gain")
 #: their values when they are not fitted (and their default initial values)
@@ -64,45 +65,8 @@ def output_unit(output: Output) -> str:
     """SI unit of a fittable output's values."""
     if output.kind == "stress":
         return "Pa"
-    if output.component == "theta":
-        return "rad"
-    return "m"
-
-
-# ---------------------------------------------------------------------------- outputs
-def output_value(system: System, output: Output, q):
-    """Value of a named output at coordinates q (traceable; kinds in FITTABLE_KINDS)."""
-    kind, comp = output.kind, output.component
-    if kind == "node":
-        b = system.beam_names.index(output.target)
-        i = -1 if output.node is None else output.node
-        if i < 0:  # from the last active node (n_elements is array data: meshes may be padded)
-            i = system.beams[b].mesh.n_elements + 1 + i
-        return system.beam_nodes(q, b)[i, COMPONENTS["node"].index(comp)]
-    if kind == "point":
-        b = system.beam_names.index(output.target)
-        return system.beams[b].position(system.beam_nodes(q, b), float(output.s))["xy".index(comp)]
-    if kind == "body":
-        k = system.body_names.index(output.target)
-        pose = system.body_pose(q, k)
-        if output.local is not None and comp != "theta":
-            c, s = jnp.cos(pose[2]), jnp.sin(pose[2])
-            lx, ly = output.local
-            return pose[0] + c * lx - s * ly if comp == "x" else pose[1] + s * lx + c * ly
-        return pose["x y theta".split().index(comp)]
-    if kind == "sliding":
-        return system.sliding(q, system.sliding_names.index(output.target))
-    if kind == "sliding_point":
-        from ..joints import SlidingJoint
-        joint = next(c for c in system.constraints if isinstance(c, SlidingJoint) and c.name == output.target)
-        s = system.sliding(q, joint.sliding)
-        return system.beams[joint.beam].position(system.beam_nodes(q, joint.beam), s)["xy".index(comp)]
-    b = system.beam_names.index(output.target)
-    beam, nodes = system.beams[b], system.beam_nodes(q, b)
-    if output.element is not None:
-        return beam.element_stress(nodes, output.element, 0.5 if output.xi is None else output.xi,
-                                   output.fibre, output.measure)
-    return beam.stress(nodes, float(output.s), output.fibre, output.measure)
+    base = "rad" if output.component == "theta" else "m"
+    return base + ("", "/s", "/s^2")[output.derivative]
 
 
 def check_output(system: System, output: Output) -> None:
@@ -162,7 +126,7 @@ def simulate_output(system: System, state: State, solver, layout: Layout, p):
     sys = _with_params(system, layout.params, p)
     seg, loop = trajectory(sys, state, solver, t_end=layout.n_steps * layout.h, dt=layout.h,
                            output_dt=layout.h)
-    y = jax.vmap(lambda q: output_value(sys, layout.output, q))(seg.q)
+    y = jax.vmap(lambda q, v, a: output_value(sys, layout.output, q, v, a))(seg.q, seg.v, seg.acc)
     return y, loop.status == Failure.OK
 
 

@@ -19,7 +19,7 @@ from ..element import laws
 from ..element.strain_energy import Formulation
 from ..errors import ModelError
 from ..model import Model, beam_point, body_point, ground, node
-from ..outputs import Output
+from ..outputs import DERIVATIVES, Output
 from ..section import Section
 from . import schema as S
 from .errors import ScenarioError
@@ -242,17 +242,18 @@ def make_outputs(spec: S.ScenarioSpec) -> list[Output]:
     """The named output columns as :class:`~ancf_jax.outputs.Output` specs, in file order."""
     out = []
     for name, o in spec.outputs.columns.items():
+        d = DERIVATIVES.index(o.derivative) if hasattr(o, "derivative") else 0
         if o.type == "node":
-            out.append(Output(name, "node", o.beam, o.component, node=o.node))
+            out.append(Output(name, "node", o.beam, o.component, node=o.node, derivative=d))
         elif o.type == "point":
-            out.append(Output(name, "point", o.beam, o.component, s=o.s))
+            out.append(Output(name, "point", o.beam, o.component, s=o.s, derivative=d))
         elif o.type == "body":
             local = None
             if o.point is not None or o.local is not None:
                 local = local_of(spec, S.PointRef(body=o.body, point=o.point, local=o.local))
-            out.append(Output(name, "body", o.body, o.component, local=local))
+            out.append(Output(name, "body", o.body, o.component, local=local, derivative=d))
         elif o.type in ("sliding", "sliding_point"):
-            out.append(Output(name, o.type, o.joint, o.component))
+            out.append(Output(name, o.type, o.joint, o.component, derivative=d))
         elif o.type == "stress":
             out.append(Output(name, "stress", o.beam, "sigma", s=o.s, element=o.element,
                               xi=o.xi if o.element is not None else None, fibre=o.fibre,

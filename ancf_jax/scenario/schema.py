@@ -21,7 +21,7 @@ from ..element.strain_energy import AXIAL_STRAINS, CURVATURES
 from ..fatigue.analysis import METHODS as FATIGUE_METHODS
 from ..fatigue.sn import CORRECTIONS
 from ..fatigue.stress import LAYOUTS
-from ..outputs import COMPONENTS
+from ..outputs import COMPONENTS, DERIVATIVES
 from ..integrate import DEFAULT_DT, RunOptions
 from ..integrators.diffrax_solvers import DiffraxSolver
 from ..integrators.generalized_alpha import GeneralizedAlpha
@@ -526,6 +526,7 @@ class NodeOutput(Table):
     beam: str = key(doc="beam name")
     node: int = key(-1, doc="node index (−1: the last, the tip)")
     component: Literal[COMPONENTS["node"]] = key("x", unit="m, -", doc="coordinate")
+    derivative: Literal[DERIVATIVES] = key("position", doc="the value, or its velocity or acceleration (per s, per s²)")
 
 
 class PointOutput(Table):
@@ -535,6 +536,7 @@ class PointOutput(Table):
     beam: str = key(doc="beam name")
     s: float = key(unit="m", ge=0.0, allow_inf_nan=False, doc="reference arc length")
     component: Literal[COMPONENTS["point"]] = key("x", unit="m", doc="coordinate")
+    derivative: Literal[DERIVATIVES] = key("position", doc="the value, or its velocity or acceleration (per s, per s²)")
 
 
 class BodyOutput(Table):
@@ -545,6 +547,7 @@ class BodyOutput(Table):
     component: Literal[COMPONENTS["body"]] = key("x", unit="m, rad", doc="coordinate")
     local: Optional[Vec2] = key(None, unit="m", doc="x, y of this body-frame point (default the centre)")
     point: Optional[str] = key(None, doc="x, y of this named point of the body")
+    derivative: Literal[DERIVATIVES] = key("position", doc="the value, or its velocity or acceleration (per s, per s²)")
 
 
 class SlidingOutput(Table):
@@ -553,6 +556,7 @@ class SlidingOutput(Table):
     type: Literal["sliding"] = key(doc="output type")
     joint: str = key(doc="sliding joint name")
     component: Literal[COMPONENTS["sliding"]] = key("s", unit="m", doc="the arc length s")
+    derivative: Literal[DERIVATIVES] = key("position", doc="the value, or its velocity or acceleration (per s, per s²)")
 
 
 class SlidingPointOutput(Table):
@@ -561,6 +565,7 @@ class SlidingPointOutput(Table):
     type: Literal["sliding_point"] = key(doc="output type")
     joint: str = key(doc="sliding joint name")
     component: Literal[COMPONENTS["sliding_point"]] = key("x", unit="m", doc="coordinate")
+    derivative: Literal[DERIVATIVES] = key("position", doc="the value, or its velocity or acceleration (per s, per s²)")
 
 
 class StressOutput(Table):
