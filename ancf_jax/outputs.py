@@ -50,6 +50,12 @@ POSITION_KINDS = ("node", "point", "body", "sliding", "sliding_point", "stress")
 DIFFERENTIABLE_KINDS = ("node", "point", "body", "sliding", "sliding_point")
 #: names of ``Output.derivative`` 0, 1, 2 (scenario key ``derivative``)
 DERIVATIVES = ("position", "velocity", "acceleration")
+#: SI unit of each kind's values, by component where it differs ("-": none; a joint's
+#: multipliers are forces or, for rotational constraints, moments)
+UNITS = {"node": {"x": "m", "y": "m", "slope_x": "-", "slope_y": "-"}, "point": "m",
+         "body": {"x": "m", "y": "m", "theta": "rad"}, "sliding": "m", "sliding_point": "m",
+         "stress": "Pa", "reaction": {"normal": "N", "tangential": "N"}, "member": {"tension": "N", "engaged": "-"},
+         "friction": "N", "drive": "N", "energy": "J"}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -92,6 +98,15 @@ class Output:
     local: Optional[tuple] = None
     derivative: int = 0
 
+    @property
+    def unit(self) -> str:
+        """SI unit of the values (:data:`UNITS`; per s or per s² for derivatives)."""
+        u = UNITS[self.kind]
+        u = u.get(self.component, "N or N*m") if isinstance(u, dict) else u
+        if self.derivative:
+            u = ("1" if u == "-" else u) + ("/s", "/s^2")[self.derivative - 1]
+        return u
+
     def __post_init__(self):
         if self.kind not in KINDS:
             raise ModelError(f"output {self.name!r}: kind must be one of {KINDS}, got {self.kind!r}")
@@ -106,6 +121,12 @@ class Output:
         if self.derivative and self.kind not in DIFFERENTIABLE_KINDS:
             raise ModelError(f"output {self.name!r}: a {self.kind} output has no derivative output; "
                              f"derivatives exist for {', '.join(DIFFERENTIABLE_KINDS)}")
+
+
+def output_units(outputs: Iterable[Output]) -> dict[str, str]:
+    """Units of the columns of :func:`evaluate` (``t`` first), for the ``units`` map
+    that accompanies every output file."""
+    return {"t": "s", **{o.name: o.unit for o in outputs}}
 
 
 def position_value(system: System, output: Output, q):

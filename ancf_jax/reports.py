@@ -15,7 +15,7 @@ import numpy as np
 from . import plotting
 from .models import m1 as m1_def
 from .models import m2 as m2_def
-from .outputs import evaluate, write_csv
+from .outputs import evaluate, output_units, write_csv
 from .results import Results
 
 
@@ -56,7 +56,8 @@ def report_m1(results: Results, out_dir: str | Path, *, figures: bool = True,
                    max_constraint_violation=base["max_constraint_violation"],
                    max_velocity_constraint_violation=base["max_velocity_constraint_violation"],
                    energy_balance_error=base["energy_balance_error"],
-                   newton_iterations=base["newton_iterations"], status=results.status)
+                   newton_iterations=base["newton_iterations"], status=results.status,
+                   units=output_units(outputs))
     _json(out / "summary.json", summary)
     if figures:
         t = results.t
@@ -126,7 +127,7 @@ def report_m2(runs: dict[int, Results], out_dir: str | Path, *, figures: bool = 
     summary = dict(model="m2", element_counts=counts, solver=r0.solver, dt=r0.dt,
                    t_end=float(r0.t[-1]), compile_time_s=r0.compile_time_s,
                    batch_wall_time_s=r0.info.get("batch_wall_time_s", sum(runs[n].wall_time_s for n in counts)),
-                   runs=per, point1_distances=distances)
+                   runs=per, point1_distances=distances, units=output_units(outputs))
     _json(out / "summary.json", summary)
     if figures:
         plotting.trajectories({f"{n} elements": (cols_all[n]["point1_x"], cols_all[n]["point1_y"])
@@ -200,6 +201,6 @@ def report_scenario(name: str, runs: dict, outputs, out_dir: str | Path, *, figu
             path = plotting.animate(r, r.system.beam_names[0], out / f"{stem}.gif",
                                     bodies=r.system.body_names, title=name)
             entry["animation"] = path.name
-    summary = dict(model=name, runs=per)
+    summary = dict(model=name, runs=per, units=output_units(outputs))
     _json(out / "summary.json", summary)
     return summary

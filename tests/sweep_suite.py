@@ -117,6 +117,7 @@ def test_store_layout(local_store):
     assert np.allclose(ds["time"].values, np.linspace(0, 0.02, 11)) and ds["time"].attrs["units"] == "s"
     assert {"beams.beam.alpha", "bodies.tip.mass"} <= set(ds.coords)
     assert ds["tip_y"].dims == ("member", "time") and {"tip_x", "sigma_e1_mid"} <= set(ds.data_vars)
+    assert ds["tip_y"].attrs["units"] == "m" and ds["sigma_e1_mid"].attrs["units"] == "Pa"
     assert list(ds["status"].values) == ["ok"] * 6
     definition = json.loads(ds.attrs["sweep"])
     assert definition["design"] == "grid" and [p["key"] for p in definition["params"]] == \

@@ -62,6 +62,7 @@ def test_run_m1_writes_every_file(tmp_path, capsys):
                 "max_abs_sigma_e1_mid", "max_constraint_violation", "energy_balance_error"):
         assert key in summary
     assert summary["elements"] == 6 and summary["t_end"] == pytest.approx(0.05)
+    assert summary["units"] == {"t": "s", "tip_x": "m", "tip_y": "m", "sigma_e1_mid": "Pa"}
     for name in ("m1_n6.npz", "fig5_shapes.png", "fig6_tip_displacement.png",
                  "fig7_stress_e1_mid.png", "fig8_stress_map.png"):
         assert (out / name).stat().st_size > 0

@@ -90,3 +90,19 @@ def test_alpha_fitted_to_an_accelerometer_record():
     record, _ = synthesize(tip, {"alpha": 0.02}, noise=0.0, rate=500.0, program="jacobian")
     both = fit_joint([tip, problem], [record, data], {"alpha": 0.08})
     assert both.converged and abs(both.estimates[0] - 0.02) <= 1e-6 * 0.02
+
+
+def test_every_output_kind_has_a_unit():
+    """One units convention (issue 25): each kind and component has its SI unit, the
+    derivatives per s and per s², and output_units maps the columns of a file."""
+    from ancf_jax.outputs import COMPONENTS, DIFFERENTIABLE_KINDS, output_units
+    for kind, comps in COMPONENTS.items():
+        for comp in comps:
+            o = Output("c", kind, "x", comp)
+            assert o.unit, (kind, comp)
+            if kind in DIFFERENTIABLE_KINDS:
+                a = Output("c", kind, "x", comp, derivative=2).unit
+                assert a.endswith("/s^2") and a.startswith("1" if o.unit == "-" else o.unit)
+    assert Output("s", "stress", "b", "sigma").unit == "Pa" and Output("e", "energy", "", "total").unit == "J"
+    assert Output("w", "body", "b", "theta", derivative=1).unit == "rad/s"
+    assert output_units([Output("tip_y", "node", "beam", "y")]) == {"t": "s", "tip_y": "m"}

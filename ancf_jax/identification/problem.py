@@ -62,11 +62,8 @@ MAX_TIME_OFFSET = 0.05
 
 
 def output_unit(output: Output) -> str:
-    """SI unit of a fittable output's values."""
-    if output.kind == "stress":
-        return "Pa"
-    base = "rad" if output.component == "theta" else "m"
-    return base + ("", "/s", "/s^2")[output.derivative]
+    """SI unit of a fittable output's values (:attr:`~ancf_jax.outputs.Output.unit`)."""
+    return output.unit
 
 
 def check_output(system: System, output: Output) -> None:

@@ -24,6 +24,7 @@ import numpy as np
 from .._version import __version__
 from ..errors import ModelError
 from ..scenario import ScenarioError, load_scenario
+from ..outputs import output_units
 from ..simulation import FIXED_STEP_SOLVERS, time_grid
 from .design import Param, SweepError, make_design, override
 
@@ -94,6 +95,7 @@ class Plan:
     times: np.ndarray
     chunks: list[ChunkTask]
     chunk_size: int
+    units: dict = dataclasses.field(default_factory=dict)
 
     @property
     def n_members(self) -> int:
@@ -212,7 +214,7 @@ def plan(definition: SweepDefinition, *, chunk_size: int | None = None, workers:
                                     run=tuple(sorted(kwargs[key].items())), batch=size,
                                     outputs=tuple(outputs), devices=devices))
     return Plan(definition=d, values=values, outputs=outputs, times=times, chunks=chunks,
-                chunk_size=size or 1)
+                chunk_size=size or 1, units=output_units(base.outputs))
 
 
 def _times(kw) -> np.ndarray:
@@ -322,7 +324,7 @@ def run_sweep(model: str, params: Sequence[Param | str], *, out, design: str = "
     p = plan(definition, chunk_size=chunk_size, workers=runner.workers, multiple=runner.multiple,
              devices=runner.multiple > 1)
     if not resume:
-        store.create(out, definition.to_dict(), p.values, p.times, p.outputs, p.chunk_size)
+        store.create(out, definition.to_dict(), p.values, p.times, p.outputs, p.chunk_size, p.units)
     done = store.stored(out)
     run = store.next_run(out)
     tasks = []

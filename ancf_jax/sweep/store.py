@@ -46,9 +46,10 @@ def _runs(ds) -> list:
 
 
 def create(path, definition: dict, values: dict[str, list], times: np.ndarray, outputs: list[str],
-           chunk: int) -> None:
+           chunk: int, units: dict[str, str] | None = None) -> None:
     """A new store for ``len(values[k])`` members; nothing computed yet (no chunk of
-    NaNs is written to disk)."""
+    NaNs is written to disk). ``units``: SI unit of each output (its ``units``
+    attribute)."""
     xr = _xr()
     n = len(next(iter(values.values())))
     t = len(times)
@@ -71,6 +72,9 @@ def create(path, definition: dict, values: dict[str, list], times: np.ndarray, o
                                created=datetime.datetime.now(datetime.timezone.utc).isoformat()))
     ds["time"].attrs["units"] = "s"
     ds["failure_time"].attrs["units"] = "s"
+    for name in outputs:
+        if units and name in units:
+            ds[name].attrs["units"] = units[name]
     c = max(1, min(int(chunk), n))
     enc = {name: {"chunks": (c, t)} for name in outputs}
     enc.update({k: {"chunks": (c,)} for k in ("status", "message", "failure_time", "stored", "run")})
