@@ -336,9 +336,14 @@ class Results:
 
     # ------------------------------------------------------------------ files
     def save_npz(self, path: str | Path, **extra) -> None:
-        """Full state histories (and any extra arrays) to a NumPy .npz file."""
+        """Full state histories (and any extra arrays) to a NumPy .npz file: ``t`` [s],
+        ``q``, ``v``, ``acc`` with one column per :meth:`~ancf_jax.system.System.coordinate_labels`
+        entry (units per s, per s² for v, acc), ``lam`` per ``constraint_labels``,
+        ``work`` per ``work_labels``."""
         np.savez_compressed(path, t=self.t, q=self.q, v=self.v, acc=self.acc, lam=self.lam,
                             work=self.work, iterations=self.iterations,
+                            coordinate_labels=np.array(self.system.coordinate_labels()),
+                            work_labels=np.array(["dissipated [J]", "external [J]", "constraint [J]"]),
                             constraint_labels=np.array(self.system.constraint_labels()),
                             body_names=np.array(self.system.body_names),
                             beam_names=np.array(self.system.beam_names),

@@ -109,6 +109,19 @@ class System(eqx.Module):
         """Slice of q holding all beam coordinates (the block-tridiagonal part)."""
         return slice(3 * self.n_bodies, self.sliding_offset)
 
+    def coordinate_labels(self) -> tuple[str, ...]:
+        """One label per coordinate of q, in order, with its SI unit: ``body:NAME.x [m]``
+        (x, y [m], theta [rad]), ``beam:NAME.node[i].x [m]`` (x, y [m], slope_x,
+        slope_y [-]; padding nodes included), ``sliding:NAME.s [m]``. Velocities and
+        accelerations have the same labels per s and per s²."""
+        labels = [f"body:{name}.{c}" for name in self.body_names
+                  for c in ("x [m]", "y [m]", "theta [rad]")]
+        for name, beam in zip(self.beam_names, self.beams):
+            labels += [f"beam:{name}.node[{i}].{c}" for i in range(beam.n_coordinates // 4)
+                       for c in ("x [m]", "y [m]", "slope_x [-]", "slope_y [-]")]
+        labels += [f"sliding:{name}.s [m]" for name in self.sliding_names]
+        return tuple(labels)
+
     def constraint_labels(self) -> tuple[str, ...]:
         """One label per constraint equation, ``joint[i]``, in the order of λ."""
         return tuple(lbl for c in self.constraints for lbl in c.equation_labels())

@@ -3,6 +3,7 @@
 import csv
 import json
 
+import numpy as np
 import pytest
 
 from ancf_jax.cli import main
@@ -63,6 +64,12 @@ def test_run_m1_writes_every_file(tmp_path, capsys):
         assert key in summary
     assert summary["elements"] == 6 and summary["t_end"] == pytest.approx(0.05)
     assert summary["units"] == {"t": "s", "tip_x": "m", "tip_y": "m", "sigma_e1_mid": "Pa"}
+    npz = np.load(out / "m1_n6.npz")
+    labels = list(npz["coordinate_labels"])  # one per column of q, v, acc, with units
+    assert len(labels) == npz["q"].shape[1] == 3 + 4 * 7
+    assert labels[:3] == ["body:tip.x [m]", "body:tip.y [m]", "body:tip.theta [rad]"]
+    assert labels[3] == "beam:beam.node[0].x [m]" and labels[-1] == "beam:beam.node[6].slope_y [-]"
+    assert list(npz["work_labels"]) == ["dissipated [J]", "external [J]", "constraint [J]"]
     for name in ("m1_n6.npz", "fig5_shapes.png", "fig6_tip_displacement.png",
                  "fig7_stress_e1_mid.png", "fig8_stress_map.png"):
         assert (out / name).stat().st_size > 0

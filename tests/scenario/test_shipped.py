@@ -67,6 +67,9 @@ def test_m2_scenario_is_the_builtin_model(m2_built):
     assert_identical(system, ref_system)
     assert_identical(state, ref_state)
     assert system.sliding_names == ("slider",) and not any(c.name.endswith(".hold") for c in system.constraints)
+    labels = system.coordinate_labels()  # the NPZ's column labels of q
+    assert len(labels) == system.n_coordinates and labels[-1] == "sliding:slider.s [m]"
+    assert labels[3:6] == ("body:cabin.x [m]", "body:cabin.y [m]", "body:cabin.theta [rad]")
 
 
 def test_m2_starts_at_rest_with_the_cabin_hanging_below_the_trolley(m2_built):
