@@ -323,6 +323,23 @@ class Beam(eqx.Module):
         e_ref = jnp.concatenate([self.mesh.reference_nodes[k], self.mesh.reference_nodes[k + 1]])
         return self.elastic_axial_force(e, e_ref, x, l)
 
+    def axial_strain(self, nodes, s):
+        """Axial strain ε [-] at arc length s (the formulation's measure)."""
+        e, x, l, k = self.element_at(nodes, s)
+        e_ref = jnp.concatenate([self.mesh.reference_nodes[k], self.mesh.reference_nodes[k + 1]])
+        return _axial_strain(e, e_ref, x, l, self.formulation.axial_strain)
+
+    def axial_force_with_rate(self, nodes, velocities, s):
+        """Axial force N = W'(ε) + N_d(ε, ε̇) [N] at arc length s: the elastic part of the
+        axial law (:meth:`axial_force`) plus its rate part (strain-rate damping), with
+        ε̇ from the nodal velocities."""
+        n = self.axial_force(nodes, s)
+        law = self.axial_law
+        if law is None or not law.has_rate:
+            return n
+        eps, eps_dot = jax.jvp(lambda nn: self.axial_strain(nn, s), (nodes,), (velocities,))
+        return n + law.rate_force(eps, eps_dot, self.section.axial_stiffness)
+
     def elastic_axial_force(self, e, e_ref, x, l):
         """Elastic axial force N = W'(ε) [N] of the axial law (EA·ε without one)."""
         if self.axial_law is None:

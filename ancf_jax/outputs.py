@@ -27,8 +27,8 @@ from .errors import ModelError
 from .results import Results
 from .system import System
 
-KINDS = ("node", "point", "body", "sliding", "sliding_point", "stress", "reaction", "energy", "member",
-         "friction", "drive")
+KINDS = ("node", "point", "body", "sliding", "sliding_point", "stress", "axial", "reaction", "energy",
+         "member", "friction", "drive")
 COMPONENTS = {
     "node": ("x", "y", "slope_x", "slope_y"),
     "point": ("x", "y"),
@@ -36,6 +36,7 @@ COMPONENTS = {
     "sliding": ("s",),
     "sliding_point": ("x", "y"),
     "stress": ("sigma",),
+    "axial": ("force", "strain"),
     "reaction": ("normal", "tangential", "0", "1", "2", "3"),
     "member": ("tension", "engaged"),
     "friction": ("force", "normal"),
@@ -54,7 +55,7 @@ DERIVATIVES = ("position", "velocity", "acceleration")
 #: multipliers are forces or, for rotational constraints, moments)
 UNITS = {"node": {"x": "m", "y": "m", "slope_x": "-", "slope_y": "-"}, "point": "m",
          "body": {"x": "m", "y": "m", "theta": "rad"}, "sliding": "m", "sliding_point": "m",
-         "stress": "Pa", "reaction": {"normal": "N", "tangential": "N"}, "member": {"tension": "N", "engaged": "-"},
+         "stress": "Pa", "axial": {"force": "N", "strain": "-"}, "reaction": {"normal": "N", "tangential": "N"}, "member": {"tension": "N", "engaged": "-"},
          "friction": "N", "drive": "N", "energy": "J"}
 
 
@@ -67,7 +68,9 @@ class Output:
         kind: ``"node"`` (beam node coordinate), ``"point"`` (material point of a beam at
             arc length ``s``), ``"body"`` (pose), ``"sliding"`` (sliding coordinate s),
             ``"sliding_point"`` (position of a sliding joint's point on its beam),
-            ``"stress"`` (bending stress, Eq. 18), ``"reaction"`` (joint multiplier
+            ``"stress"`` (bending stress, Eq. 18), ``"axial"`` (axial force N [N],
+            tension positive, elastic and rate part of the axial law, or axial strain ε
+            in the formulation's measure, at arc length ``s``), ``"reaction"`` (joint multiplier
             component, or normal/tangential reaction of a sliding joint), ``"energy"``,
             ``"member"`` (force [N] and engaged state of a spring-damper named ``target``),
             ``"friction"`` (friction force and normal reaction [N] of a sliding
@@ -75,7 +78,7 @@ class Output:
         target: beam, body or joint name (unused for energy).
         component: see :data:`COMPONENTS`.
         node: node index (``"node"``); negative counts from the last node.
-        s: arc length [m] (``"point"``; ``"stress"`` if ``element`` is None).
+        s: arc length [m] (``"point"``, ``"axial"``; ``"stress"`` if ``element`` is None).
         element, xi: element index (0-based) and ξ = x/l ∈ [0, 1] (``"stress"``).
         fibre: fibre distance y [m] (``"stress"``; default the outer fibre).
         measure: curvature measure of a stress (``"exact"``, ``"small_strain"``).
@@ -127,6 +130,15 @@ def output_units(outputs: Iterable[Output]) -> dict[str, str]:
     """Units of the columns of :func:`evaluate` (``t`` first), for the ``units`` map
     that accompanies every output file."""
     return {"t": "s", **{o.name: o.unit for o in outputs}}
+
+
+def axial_value(system: System, output: Output, q, v):
+    """Axial force [N] or strain [-] of an ``"axial"`` output at q, v (traceable)."""
+    b = system.beam_names.index(output.target)
+    beam, nodes = system.beams[b], system.beam_nodes(q, b)
+    if output.component == "strain":
+        return beam.axial_strain(nodes, float(output.s))
+    return beam.axial_force_with_rate(nodes, system.beam_nodes(v, b), float(output.s))
 
 
 def position_value(system: System, output: Output, q):
@@ -191,6 +203,9 @@ def evaluate(results: Results, outputs: Iterable[Output]) -> dict[str, np.ndarra
         if o.derivative:
             f = jax.jit(jax.vmap(lambda q, v, a, o=o: output_value(results.system, o, q, v, a)))
             val = f(jnp.asarray(results.q), jnp.asarray(results.v), jnp.asarray(results.acc))
+        elif o.kind == "axial":
+            f = jax.jit(jax.vmap(lambda q, v, o=o: axial_value(results.system, o, q, v)))
+            val = f(jnp.asarray(results.q), jnp.asarray(results.v))
         elif o.kind == "node":
             col = "x y slope_x slope_y".split().index(o.component)
             val = results.node(o.target, -1 if o.node is None else o.node)[:, col]

@@ -106,3 +106,44 @@ def test_every_output_kind_has_a_unit():
     assert Output("s", "stress", "b", "sigma").unit == "Pa" and Output("e", "energy", "", "total").unit == "J"
     assert Output("w", "body", "b", "theta", derivative=1).unit == "rad/s"
     assert output_units([Output("tip_y", "node", "beam", "y")]) == {"t": "s", "tip_y": "m"}
+
+
+def test_axial_force_and_strain_outputs():
+    """The "axial" output: along the hanging chain's static catenary against
+    N(s) = √(H² + (w (L/2 − s))²) of the inextensible catenary (measured within 1.5e-3:
+    the cable stretches, 16 elements), at the pins against the pin's reaction
+    (measured 5e-6 relative), strain · EA = N (the linear law); and a uniformly
+    stretching strain-rate damped bar: N = EA ε + d ε̇ (Green–Lagrange ε = (λ² − 1)/2,
+    ε̇ = λλ̇) to round-off."""
+    import math
+
+    import jax.numpy as jnp
+    from scipy.optimize import brentq
+
+    from ancf_jax import mesh
+    from ancf_jax.element import laws
+    from ancf_jax.section import Section
+
+    sc = load_scenario("hanging_chain")
+    at = (0.0, 0.275, 0.55, 1.1)
+    cols = evaluate(sc.static_results(), list(sc.outputs) + [Output(f"n{s}", "axial", "chain", "force", s=s)
+                                                             for s in at]
+                    + [Output("eps", "axial", "chain", "strain", s=1.1)])
+    w = 0.8 * G
+    a = brentq(lambda a: 2 * a * math.sinh(2.0 / (2 * a)) - 2.2, 0.05, 100.0)
+    for s in at:
+        assert cols[f"n{s}"][0] == pytest.approx(math.hypot(w * a, w * (1.1 - s)), rel=2e-3)
+    assert cols["n0.0"][0] == pytest.approx(math.hypot(cols["left_fx"][0], cols["left_fy"][0]), rel=1e-4)
+    assert cols["eps"][0] * 1e11 * 2.8e-5 == pytest.approx(cols["n1.1"][0], rel=1e-12)
+    assert Output("n", "axial", "chain", "force", s=0.5).unit == "N"
+
+    ea, d, lam, lam_dot, length = 1e4, 30.0, 1.01, 0.2, 1.0
+    m = Model()
+    m.add_beam("bar", mesh.straight((0.0, 0.0), (1.0, 0.0), length, 2), Section.from_stiffness(ea, 1.0, 0.5),
+               axial_law=laws.StrainRateDamped(d))
+    system, _ = m.build(assemble=False)
+    beam, x = system.beams[0], np.linspace(0.0, length, 3)
+    nodes = jnp.asarray(np.column_stack([lam * x, 0 * x, lam + 0 * x, 0 * x]))
+    vel = jnp.asarray(np.column_stack([lam_dot * x, 0 * x, lam_dot + 0 * x, 0 * x]))
+    n = beam.axial_force_with_rate(nodes, vel, 0.3)
+    assert float(n) == pytest.approx(ea * (lam**2 - 1) / 2 + d * lam * lam_dot, rel=1e-12)

@@ -399,7 +399,7 @@ class Checker:
     def outputs(self):
         for name, o in self.spec.outputs.columns.items():
             path = ("outputs", "columns", name)
-            if o.type in ("node", "point", "stress"):
+            if o.type in ("node", "point", "stress", "axial"):
                 self.beam(path + ("beam",), o.beam)
             if o.type == "stress":
                 sec = self.spec.beams[o.beam].section
@@ -408,7 +408,7 @@ class Checker:
                                   f"key E in beams.{o.beam}.section (or no stress output)")
             if o.type == "node":
                 self.node_index(path + ("node",), o.beam, o.node)
-            elif o.type == "point":
+            elif o.type in ("point", "axial"):
                 self.arc_length(path + ("s",), o.beam, o.s)
             elif o.type == "body":
                 self.body(path + ("body",), o.body)

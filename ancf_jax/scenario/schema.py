@@ -568,6 +568,16 @@ class SlidingPointOutput(Table):
     derivative: Literal[DERIVATIVES] = key("position", doc="the value, or its velocity or acceleration (per s, per s²)")
 
 
+class AxialOutput(Table):
+    """The axial force N (tension positive; the elastic and rate part of the axial law)
+    or the axial strain ε (the formulation's measure) at arc length s."""
+
+    type: Literal["axial"] = key(doc="output type")
+    beam: str = key(doc="beam name")
+    s: float = key(unit="m", ge=0.0, allow_inf_nan=False, doc="reference arc length")
+    component: Literal[COMPONENTS["axial"]] = key("force", unit="N, -", doc="force or strain")
+
+
 class StressOutput(Table):
     """Bending stress σ = −E y (κ − κ₀) (Eq. 18) at arc length s, or in an element at ξ."""
 
@@ -624,7 +634,7 @@ class DriveOutput(Table):
 
 
 Output = Annotated[Union[NodeOutput, PointOutput, BodyOutput, SlidingOutput, SlidingPointOutput,
-                         StressOutput, ReactionOutput, EnergyOutput, MemberOutput, FrictionOutput,
+                         StressOutput, AxialOutput, ReactionOutput, EnergyOutput, MemberOutput, FrictionOutput,
                          DriveOutput],
                    Field(discriminator="type")]
 
