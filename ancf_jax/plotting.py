@@ -24,19 +24,32 @@ def _finish(fig, path):
     return fig
 
 
-def time_history(t, series: dict, *, ylabel: str, title: str = "", path=None, styles=None):
-    """Curves over time: ``series`` maps label → values (same length as t)."""
-    fig, ax = plt.subplots(figsize=(7, 3.6))
+def time_history(t, series: dict, *, ylabel: str, title: str = "", path=None, styles=None,
+                 difference: tuple[str, str] | None = None):
+    """Curves over time: ``series`` maps label → values (same length as t).
+    ``difference=(a, b)`` adds a panel below with series a − b (differences too small
+    to see between the curves above, e.g. two curvature measures, Fig. 7)."""
+    if difference is None:
+        fig, ax = plt.subplots(figsize=(7, 3.6))
+    else:
+        fig, (ax, low) = plt.subplots(2, 1, figsize=(7, 5.4), sharex=True, height_ratios=(2, 1))
     for i, (label, y) in enumerate(series.items()):
         kw = (styles or {}).get(label, {})
         ax.plot(t, y, label=label, lw=1.2, **kw)
-    ax.set_xlabel("time [s]")
     ax.set_ylabel(ylabel)
     if title:
         ax.set_title(title)
     ax.grid(alpha=0.3)
     if len(series) > 1:
         ax.legend()
+    if difference is not None:
+        a, b = difference
+        low.plot(t, np.asarray(series[a]) - np.asarray(series[b]), lw=1.0, color="k")
+        low.set_ylabel("difference " + (ylabel[ylabel.rfind("["):] if "[" in ylabel else ""))
+        low.set_title(f"{a} − {b}", fontsize=9)
+        low.grid(alpha=0.3)
+        ax = low
+    ax.set_xlabel("time [s]")
     return _finish(fig, path)
 
 
@@ -103,9 +116,16 @@ def stress_map(t, s, sigma, *, title: str = "", path=None, unit: float = 1e6, la
     return _finish(fig, path)
 
 
-def trajectories(curves: dict, *, title: str = "", path=None, xlabel="X [m]", ylabel="Y [m]"):
-    """Planar trajectories: ``curves`` maps label → (x, y) (paper Fig. 13)."""
-    fig, ax = plt.subplots(figsize=(6.5, 4.2))
+def trajectories(curves: dict, *, title: str = "", path=None, xlabel="X [m]", ylabel="Y [m]",
+                 t=None, reference: str | None = None):
+    """Planar trajectories: ``curves`` maps label → (x, y) (paper Fig. 13). With the
+    common sample times ``t`` and a ``reference`` label (e.g. the finest mesh), a panel
+    below shows each other curve's distance from the reference over time [mm]: the
+    differences between meshes are millimetres on a metre-sized plot."""
+    if reference is None:
+        fig, ax = plt.subplots(figsize=(6.5, 4.2))
+    else:
+        fig, (ax, low) = plt.subplots(2, 1, figsize=(6.5, 6.4), height_ratios=(2, 1))
     for label, (x, y) in curves.items():
         ax.plot(x, y, lw=1.3, label=label)
     ax.set_xlabel(xlabel)
@@ -115,6 +135,17 @@ def trajectories(curves: dict, *, title: str = "", path=None, xlabel="X [m]", yl
     ax.legend()
     if title:
         ax.set_title(title)
+    if reference is not None:
+        xr, yr = (np.asarray(a) for a in curves[reference])
+        for label, (x, y) in curves.items():
+            if label != reference:
+                k = min(len(x), len(xr), len(t))
+                low.plot(t[:k], 1e3 * np.hypot(np.asarray(x)[:k] - xr[:k], np.asarray(y)[:k] - yr[:k]),
+                         lw=1.1, label=label)
+        low.set_xlabel("time [s]")
+        low.set_ylabel(f"distance from {reference} [mm]")
+        low.grid(alpha=0.3)
+        low.legend(fontsize=8)
     return _finish(fig, path)
 
 

@@ -69,7 +69,8 @@ def report_m1(results: Results, out_dir: str | Path, *, figures: bool = True,
                                   "approximate curvature (Eq. 17)": 1e-6 * sig_approx},
                               ylabel="σ at E1 midpoint, y = +0.5 mm [MPa]",
                               title="M1 dynamic stress (Fig. 7)", path=out / "fig7_stress_e1_mid.png",
-                              styles={"approximate curvature (Eq. 17)": dict(ls="--")})
+                              styles={"approximate curvature (Eq. 17)": dict(ls="--")},
+                              difference=("exact curvature (Eq. 16)", "approximate curvature (Eq. 17)"))
         plotting.stress_map(t, s, sigma, title="M1 stress along the beam (Fig. 8), exact curvature",
                             path=out / "fig8_stress_map.png")
         plotting.deformed_shapes(results, "beam", _times(float(t[-1]) if len(t) > 1 else 0.0, 9),
@@ -132,7 +133,8 @@ def report_m2(runs: dict[int, Results], out_dir: str | Path, *, figures: bool = 
     if figures:
         plotting.trajectories({f"{n} elements": (cols_all[n]["point1_x"], cols_all[n]["point1_y"])
                                for n in counts}, title="M2: trajectory of point 1 (Fig. 13)",
-                              path=out / "fig13_point1_trajectories.png")
+                              path=out / "fig13_point1_trajectories.png", t=cols_all[ref]["t"],
+                              reference=f"{ref} elements" if len(counts) > 1 else None)
         rn = runs[ref]
         plotting.deformed_shapes(rn, "cable", _times(float(rn.t[-1]), 7), bodies=("trolley", "cabin"),
                                  title=f"M2: cable and bodies, {ref} elements (Fig. 12)",
