@@ -123,3 +123,23 @@ def resolve(system: System, names) -> tuple[Parameter, ...]:
     if not out:
         raise ModelError("no parameters to fit")
     return tuple(out)
+
+
+#: the dotted scenario keys of the parameters (NAME: a beam or body of the file)
+SCENARIO_KEYS = ("beams.NAME.alpha", "beams.NAME.beta", "beams.NAME.section.E", "bodies.NAME.mass")
+
+
+def from_scenario_key(key: str) -> str:
+    """The parameter name (``KIND.TARGET``) of a dotted scenario key in
+    :data:`SCENARIO_KEYS` (``beams.beam.alpha`` → ``alpha.beam``, ``bodies.tip.mass`` →
+    ``mass.tip``); ModelError for any other key (its value is not a traced leaf of the
+    built system, so nothing can be differentiated with respect to it)."""
+    parts = str(key).split(".")
+    if len(parts) == 3 and parts[0] == "beams" and parts[2] in ("alpha", "beta"):
+        return f"{parts[2]}.{parts[1]}"
+    if len(parts) == 4 and parts[0] == "beams" and parts[2:] == ["section", "E"]:
+        return f"E.{parts[1]}"
+    if len(parts) == 3 and parts[0] == "bodies" and parts[2] == "mass":
+        return f"mass.{parts[1]}"
+    raise ModelError(f"{key}: no derivative with respect to this key; differentiable keys: "
+                     f"{', '.join(SCENARIO_KEYS)}")

@@ -1,10 +1,17 @@
-"""Variance-based (Sobol) sensitivity of scalar outputs of a sweep, with SALib.
+"""Sensitivity of scalar outputs: variance-based (Sobol, with SALib) over a sweep, and
+local (gradients through the run) at chosen points.
 
-Run the sweep with the ``saltelli`` design (``N (d + 2)`` members for ``d`` ranges and
-``samples = N``; first-order and total indices, no second order), then reduce each
-member's output history to a scalar (:data:`REDUCTIONS`: its maximum, minimum, maximum
-magnitude or final value) and estimate S1 and ST with Saltelli's and Jansen's
-estimators (``SALib.analyze.sobol``), with bootstrap confidence intervals.
+Sobol: run the sweep with the ``saltelli`` design (``N (d + 2)`` members for ``d``
+ranges and ``samples = N``; first-order and total indices, no second order), then
+reduce each member's output history to a scalar (:data:`REDUCTIONS`: its maximum,
+minimum, maximum magnitude or final value) and estimate S1 and ST with Saltelli's and
+Jansen's estimators (``SALib.analyze.sobol``), with bootstrap confidence intervals.
+
+Local: :func:`local_sensitivities` differentiates the same scalar with respect to the
+swept keys (those that are traced leaves of the built system:
+:data:`~ancf_jax.identification.parameters.SCENARIO_KEYS`) at each of several points,
+by forward mode (``jax.jacfwd``) through the whole run, vmapped over the points: one
+compiled program, no rebuild.
 """
 
 from __future__ import annotations
@@ -45,6 +52,66 @@ def scalar(ds, output: str, reduce: str = "max") -> np.ndarray:
     if reduce == "final":
         return y[:, -1]
     raise SweepError(f"reduce: must be one of {', '.join(REDUCTIONS)}, got {reduce!r}")
+
+
+def _reduce(y, reduce: str):
+    """``reduce`` of a traced output history y (n,) (as :func:`scalar`)."""
+    import jax.numpy as jnp
+    return {"max": jnp.max, "min": jnp.min, "maxabs": lambda a: jnp.max(jnp.abs(a)),
+            "final": lambda a: a[-1]}[reduce](y)
+
+
+def local_sensitivities(model, keys, points, output: str, reduce: str = "max", *,
+                        overrides=(), t_end: float | None = None) -> dict:
+    """Gradients of ``reduce(output)`` with respect to scenario keys at several points.
+
+    Args:
+        model: a shipped scenario name or a scenario file.
+        keys: dotted keys (:data:`~ancf_jax.identification.parameters.SCENARIO_KEYS`).
+        points: values of the keys, shape (m, len(keys)) (e.g. the members of a sweep,
+            or the centre of its box).
+        output: a named output of the scenario (a position, stress, or their
+            derivatives: what :mod:`ancf_jax.identification` can fit).
+        reduce: one of :data:`REDUCTIONS`.
+        overrides: ``--set`` items applied to the scenario first.
+        t_end: simulated span [s] (default the scenario's).
+
+    Returns:
+        ``values`` (m,), ``gradients`` {key: (m,)} [output unit / key unit] and
+        ``normalized`` {key: (m,)}: (∂y/∂p)·p/y, the relative change of the output per
+        relative change of the key (comparable across keys of different units).
+    """
+    import jax
+    import jax.numpy as jnp
+
+    from ..errors import ModelError
+    from ..identification import parameters as P
+    from ..identification.problem import Problem, simulate_output
+    from ..identification.data import Measurements
+    if reduce not in REDUCTIONS:
+        raise SweepError(f"reduce: must be one of {', '.join(REDUCTIONS)}, got {reduce!r}")
+    keys = list(keys)
+    points = np.atleast_2d(np.asarray(points, float))
+    if points.shape[1] != len(keys) or not np.all(np.isfinite(points)):
+        raise SweepError(f"points: finite values of shape (m, {len(keys)}) (one column per key), "
+                         f"got shape {points.shape}")
+    try:
+        names = [P.from_scenario_key(k) for k in keys]
+        problem = Problem.from_scenario(model, names, output, overrides=overrides, t_end=t_end)
+    except ModelError as e:
+        raise SweepError(str(e)) from None
+    grid = problem.t0 + problem.dt * np.arange(int(round((problem.t_end - problem.t0) / problem.dt)) + 1)
+    layout = problem.layout([Measurements.from_arrays(grid, np.zeros_like(grid))])
+
+    def value(p):
+        y, ok = simulate_output(problem.system, problem.state, problem.solver, layout, p)
+        return jnp.where(ok, _reduce(y, reduce), jnp.nan)
+
+    f = jax.jit(jax.vmap(lambda p: (value(p), jax.jacfwd(value)(p))))
+    vals, jac = (np.asarray(a) for a in f(jnp.asarray(points)))
+    grads = {k: jac[:, i] for i, k in enumerate(keys)}
+    return dict(values=vals, gradients=grads,
+                normalized={k: grads[k] * points[:, i] / vals for i, k in enumerate(keys)})
 
 
 def sobol_indices(ds, output: str, reduce: str = "max", *, seed: int = 0) -> dict[str, dict[str, float]]:
