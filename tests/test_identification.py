@@ -230,6 +230,13 @@ def test_bad_parameters(problem):
         problem.vector({"alpha": -1.0})
     with pytest.raises(ModelError, match="no output named 'tip_z'"):
         Problem.from_scenario("m1", output="tip_z")
+    # dotted scenario keys name the same parameters; a shape-changing key is refused
+    from ancf_jax.identification.parameters import resolve
+    a, m, e = resolve(problem.system, ["beams.beam.alpha", "bodies.tip.mass", "beams.beam.section.E"])
+    assert (a.kind, a.target, m.kind, m.target, e.kind) == ("alpha", "beam", "mass", "tip", "E")
+    assert a.name == "beams.beam.alpha"
+    with pytest.raises(ModelError, match="beams.beam.elements: no derivative with respect to this key"):
+        resolve(problem.system, ["beams.beam.elements"])
 
 
 def test_parameters_are_set_on_the_built_system(problem):

@@ -10,7 +10,10 @@ A parameter is named ``KIND`` or ``KIND.TARGET``:
 ==============  ===============================================  ======
 
 Without ``.TARGET``, a beam parameter needs a system with exactly one beam; ``tip_mass``
-means the body named ``tip``, else the only body. Parameters are changed on a built
+means the body named ``tip``, else the only body. The dotted scenario keys of the same
+quantities name them too (:data:`SCENARIO_KEYS`: ``beams.beam.alpha``,
+``beams.beam.section.E``, ``bodies.tip.mass``); any other key (an element count, a
+length: they change the model's shapes or its construction) is refused. Parameters are changed on a built
 :class:`~ancf_jax.system.System` with ``equinox.tree_at``, so they can be traced
 (differentiated, batched) without rebuilding or recompiling anything.
 """
@@ -90,7 +93,8 @@ def resolve(system: System, names) -> tuple[Parameter, ...]:
     out: list[Parameter] = []
     for raw in names:
         name = str(raw).strip()
-        kind, _, target = name.partition(".")
+        # a dotted scenario key (beams.beam.alpha, bodies.tip.mass): its parameter
+        kind, _, target = (from_scenario_key(name) if name.startswith(("beams.", "bodies.")) else name).partition(".")
         kind = _ALIASES.get(kind, kind)
         if kind not in KINDS:
             raise ModelError(f"unknown parameter {name!r}; known: alpha, beta, E, tip_mass "
