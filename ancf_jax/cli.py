@@ -137,6 +137,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--max-steps", type=_positive_int, default=None,
                      help=f"run even if it takes more than {MAX_STEPS:.0e} time steps: the most steps "
                           "accepted (a longer run is refused before compiling)")
+    run.add_argument("--continue-from", type=Path, default=None, metavar="FILE.npz",
+                     help="continue the fixed-step run that wrote FILE.npz from where it stopped (same model, "
+                          "--elements, --set and solver; --t-end is then the span added)")
     run.add_argument("--animate", action="store_true", help="also write an animation (GIF)")
     run.add_argument("--no-figures", action="store_true", help="skip the figures")
     run.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -391,6 +394,28 @@ def _simulate_all(scs, settings, kw) -> dict:
         raise _UsageError(str(e)) from None
 
 
+def _continue(args, scs, kw) -> dict:
+    """``run --continue-from``: one run from the checkpoint of an earlier run's NPZ."""
+    from .errors import ModelError
+    from .simulation import load_checkpoint, simulate
+    if len(scs) != 1:
+        raise _UsageError("argument --continue-from: continues one run (give one element count)")
+    try:
+        checkpoint = load_checkpoint(args.continue_from)
+    except (OSError, ValueError, KeyError, ModelError) as e:
+        raise _UsageError(f"argument --continue-from: {e}") from None
+    (label, sc), = scs.items()
+    system, _ = sc.build()
+    if tuple(checkpoint.q.shape) != (system.n_coordinates,):
+        raise _UsageError(f"argument --continue-from: {args.continue_from} holds {checkpoint.q.shape[0]} "
+                          f"coordinates, the model {system.n_coordinates}; give the model, --elements and "
+                          "--set of the run it continues")
+    try:
+        return {label: simulate(system, checkpoint, **kw)}
+    except ModelError as e:  # e.g. another solver than the checkpoint's
+        raise _UsageError(f"argument --continue-from: {e}") from None
+
+
 def _problems(command: str, runs: dict) -> int:
     """Print one line per failed or interrupted run; the exit status (0, 1, or 130
     when interrupted)."""
@@ -431,7 +456,7 @@ def _run(args) -> int:
     kw.update(progress=False if args.no_progress else None, on_failure="return", max_steps=args.max_steps)
     out = _check_out(Path(args.out) if args.out is not None else Path("results") / base.name)
     _check_size(args, scs, settings)
-    runs = _simulate_all(scs, settings, kw)
+    runs = _continue(args, scs, kw) if args.continue_from is not None else _simulate_all(scs, settings, kw)
     labels, results = list(runs), list(runs.values())
     figures = not args.no_figures
     if base.name == "m1" and len(runs) == 1:

@@ -375,9 +375,38 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
     return jax.lax.scan(interval, loop, None, length=n_intervals)
 
 
-def initial_loop(system: System, integrator: AbstractIntegrator, state: State, context) -> LoopState:
-    """Initial :class:`LoopState` (consistent accelerations and multipliers)."""
-    carry = integrator.init(system, state, context)
+class Checkpoint(eqx.Module):
+    """Where a fixed-step run stopped: the integrator's carry after its last step, its
+    memory of earlier steps included (generalized-α's algorithmic acceleration) and the
+    work integrals. A run started from it with the same solver and step continues the
+    stopped one as if it had not stopped (:attr:`ancf_jax.results.Results.checkpoint`).
+
+    Attributes:
+        carry: the :class:`~ancf_jax.integrators.base.Carry`.
+        solver: the name of the solver that made it.
+    """
+
+    carry: Carry
+    solver: str = eqx.field(static=True)
+
+    @property
+    def q(self):
+        return self.carry.q
+
+    @property
+    def v(self):
+        return self.carry.v
+
+    @property
+    def t(self):
+        return self.carry.t
+
+
+def initial_loop(system: System, integrator: AbstractIntegrator, state: State | Checkpoint,
+                 context) -> LoopState:
+    """Initial :class:`LoopState`: consistent accelerations and multipliers of a state,
+    or the carry of a :class:`Checkpoint` as it is."""
+    carry = state.carry if isinstance(state, Checkpoint) else integrator.init(system, state, context)
     return LoopState(carry, jnp.asarray(Failure.OK), jnp.asarray(jnp.nan))
 
 

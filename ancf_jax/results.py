@@ -128,6 +128,8 @@ class Results:
         failure_time: when it failed [s] (None when ok).
         message: the failure message (empty when ok).
         info: further solver statistics.
+        checkpoint: where a fixed-step run stopped, to continue it
+            (:class:`~ancf_jax.integrate.Checkpoint`; None for adaptive solvers).
     """
 
     system: System
@@ -146,6 +148,7 @@ class Results:
     failure_time: float | None = None
     message: str = ""
     info: dict = dataclasses.field(default_factory=dict)
+    checkpoint: Any = None
 
     # ------------------------------------------------------------------ lookup
     def _index(self, names: tuple, name: str, what: str) -> int:
@@ -339,7 +342,8 @@ class Results:
         """Full state histories (and any extra arrays) to a NumPy .npz file: ``t`` [s],
         ``q``, ``v``, ``acc`` with one column per :meth:`~ancf_jax.system.System.coordinate_labels`
         entry (units per s, per s² for v, acc), ``lam`` per ``constraint_labels``,
-        ``work`` per ``work_labels``."""
+        ``work`` per ``work_labels``; and ``checkpoint_*`` (the run's
+        :attr:`checkpoint`, read back by :func:`ancf_jax.simulation.load_checkpoint`)."""
         np.savez_compressed(path, t=self.t, q=self.q, v=self.v, acc=self.acc, lam=self.lam,
                             work=self.work, iterations=self.iterations,
                             coordinate_labels=np.array(self.system.coordinate_labels()),
@@ -347,7 +351,15 @@ class Results:
                             constraint_labels=np.array(self.system.constraint_labels()),
                             body_names=np.array(self.system.body_names),
                             beam_names=np.array(self.system.beam_names),
-                            sliding_names=np.array(self.system.sliding_names), **extra)
+                            sliding_names=np.array(self.system.sliding_names), **self._checkpoint_arrays(),
+                            **extra)
+
+    def _checkpoint_arrays(self) -> dict:
+        if self.checkpoint is None:
+            return {}
+        c = self.checkpoint.carry
+        return {"checkpoint_solver": np.array(self.checkpoint.solver),
+                **{f"checkpoint_{k}": np.asarray(getattr(c, k)) for k in type(c).__dataclass_fields__}}
 
     def save_summary(self, path: str | Path, **extra) -> dict:
         """Write :meth:`summary` (and any extra entries) as JSON; returns the dict."""

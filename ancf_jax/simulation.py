@@ -39,8 +39,8 @@ import numpy as np
 
 from . import _memory
 from .errors import ModelError, SimulationError, SimulationInterrupted
-from .integrate import (DEFAULT_DT, DEFAULT_HALVINGS, LoopState, RunOptions, initial_loop, integrate_fixed,
-                        segment_of, sliding_beams)
+from .integrate import (DEFAULT_DT, DEFAULT_HALVINGS, Checkpoint, LoopState, RunOptions, initial_loop,
+                        integrate_fixed, segment_of, sliding_beams)
 from .failures import Failure
 from .integrators.base import AbstractAdaptiveSolver, AbstractIntegrator, AbstractSolver, Carry
 from .integrators.diffrax_solvers import KINDS as DIFFRAX_KINDS
@@ -346,6 +346,10 @@ def simulate(system: System, state: State, *, t_end: float, dt: float | None = N
                    fixed_step=not isinstance(solver, AbstractAdaptiveSolver), max_steps=max_steps,
                    max_output_bytes=max_output_bytes)
     t0 = float(state.t)
+    if isinstance(state, Checkpoint) and (isinstance(solver, AbstractAdaptiveSolver)
+                                          or solver_name(solver) != state.solver):
+        raise ModelError(f"state: a checkpoint of a {state.solver} run continues with solver "
+                         f"{state.solver!r}, got {solver_name(solver)!r}")
     if isinstance(solver, AbstractAdaptiveSolver):
         return _simulate_adaptive(system, state, solver, t0, n_int, out_dt, dt, per_chunk, n_chunks,
                                   options, on_failure, progress)
@@ -465,10 +469,23 @@ def _results_fixed(system, segs, loop, solver, n_int, sub, h, t0, compile_s, wal
     message = "" if status == Failure.OK else _failure_message(
         status, t_fail, system, options, last=(cat["q"][-1], cat["v"][-1], float(cat["t"][-1])),
         solver=solver_name(solver))
+    checkpoint = Checkpoint(jax.tree.map(take, loop.carry), solver_name(solver))
     return Results(system=system, solver=solver_name(solver), dt=float(h), wall_time_s=wall,
                    compile_time_s=compile_s, status=Failure(status).reason, failure_time=t_fail,
                    message=message, info=dict(steps=int((n_rows - 1) * sub), substeps_per_output=sub),
-                   **cat)
+                   checkpoint=checkpoint, **cat)
+
+
+def load_checkpoint(path) -> Checkpoint:
+    """The :class:`~ancf_jax.integrate.Checkpoint` saved in an NPZ file of a fixed-step
+    run (:meth:`~ancf_jax.results.Results.save_npz`), to continue it:
+    ``simulate(system, load_checkpoint(path), t_end=more, dt=same)``."""
+    with np.load(path) as f:
+        if "checkpoint_solver" not in f:
+            raise ModelError(f"{path}: no checkpoint in this file (written by a fixed-step run of "
+                             "ancf_jax 0.1 or later)")
+        carry = Carry(*(jnp.asarray(f[f"checkpoint_{k}"]) for k in Carry.__dataclass_fields__))
+        return Checkpoint(carry, str(f["checkpoint_solver"]))
 
 
 def _simulate_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, options,
