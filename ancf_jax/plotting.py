@@ -69,8 +69,10 @@ def beam_curve(results: Results, beam: str, row: int, points_per_element: int = 
 
 
 def deformed_shapes(results: Results, beam: str, times: Sequence[float], *, bodies: Sequence[str] = (),
-                    title: str = "", path=None, equal: bool = True):
-    """Beam centre line (and body centres) at chosen times (paper Figs. 5 and 12)."""
+                    title: str = "", path=None, equal: bool = True, links=()):
+    """Beam centre line (and body centres) at chosen times (paper Figs. 5 and 12).
+    ``links`` are pairs of body names drawn joined by a line (e.g. a trolley and the
+    cabin hanging from it); bodies are labelled by name at the first time."""
     fig, ax = plt.subplots(figsize=(6.5, 4.5))
     cmap = plt.get_cmap("viridis")
     for i, tt in enumerate(times):
@@ -78,9 +80,14 @@ def deformed_shapes(results: Results, beam: str, times: Sequence[float], *, bodi
         x, y = beam_curve(results, beam, row)
         c = cmap(i / max(len(times) - 1, 1))
         ax.plot(x, y, color=c, lw=1.5, label=f"t = {results.t[row]:.2f} s")
+        for a, b in links:
+            pa, pb = results.body(a)[row], results.body(b)[row]
+            ax.plot([pa[0], pb[0]], [pa[1], pb[1]], color=c, lw=1.0, ls=":")
         for bname in bodies:
             p = results.body(bname)[row]
             ax.plot(p[0], p[1], "s", color=c, ms=6)
+            if i == 0:
+                ax.annotate(bname, (p[0], p[1]), textcoords="offset points", xytext=(6, 4), fontsize=8)
     ax.set_xlabel("X [m]")
     ax.set_ylabel("Y [m]")
     if equal:

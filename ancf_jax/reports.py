@@ -137,6 +137,7 @@ def report_m2(runs: dict[int, Results], out_dir: str | Path, *, figures: bool = 
                               reference=f"{ref} elements" if len(counts) > 1 else None)
         rn = runs[ref]
         plotting.deformed_shapes(rn, "cable", _times(float(rn.t[-1]), 7), bodies=("trolley", "cabin"),
+                                 links=(("trolley", "cabin"),),
                                  title=f"M2: cable and bodies, {ref} elements (Fig. 12)",
                                  path=out / f"fig12_shapes_n{ref}.png")
         s, sigma = rn.stress_along("cable", 11)
