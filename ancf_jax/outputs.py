@@ -37,7 +37,7 @@ COMPONENTS = {
     "sliding_point": ("x", "y"),
     "stress": ("sigma",),
     "axial": ("force", "strain"),
-    "reaction": ("normal", "tangential", "0", "1", "2", "3"),
+    "reaction": ("normal", "tangential", "fx", "fy", "0", "1", "2", "3"),
     "member": ("tension", "engaged"),
     "friction": ("force", "normal"),
     "drive": ("force",),
@@ -55,7 +55,7 @@ DERIVATIVES = ("position", "velocity", "acceleration")
 #: multipliers are forces or, for rotational constraints, moments)
 UNITS = {"node": {"x": "m", "y": "m", "slope_x": "-", "slope_y": "-"}, "point": "m",
          "body": {"x": "m", "y": "m", "theta": "rad"}, "sliding": "m", "sliding_point": "m",
-         "stress": "Pa", "axial": {"force": "N", "strain": "-"}, "reaction": {"normal": "N", "tangential": "N"}, "member": {"tension": "N", "engaged": "-"},
+         "stress": "Pa", "axial": {"force": "N", "strain": "-"}, "reaction": {"normal": "N", "tangential": "N", "fx": "N", "fy": "N"}, "member": {"tension": "N", "engaged": "-"},
          "friction": "N", "drive": "N", "energy": "J"}
 
 
@@ -71,7 +71,9 @@ class Output:
             ``"stress"`` (bending stress, Eq. 18), ``"axial"`` (axial force N [N],
             tension positive, elastic and rate part of the axial law, or axial strain ε
             in the formulation's measure, at arc length ``s``), ``"reaction"`` (joint multiplier
-            component, or normal/tangential reaction of a sliding joint), ``"energy"``,
+            component, normal/tangential reaction of a sliding joint on its body, or
+            ``fx``/``fy``: the force the joint applies in global x, y,
+            :meth:`~ancf_jax.results.Results.joint_force`), ``"energy"``,
             ``"member"`` (force [N] and engaged state of a spring-damper named ``target``),
             ``"friction"`` (friction force and normal reaction [N] of a sliding
             friction), ``"drive"`` (tangential force [N] of a sliding drive).
@@ -232,6 +234,8 @@ def evaluate(results: Results, outputs: Iterable[Output]) -> dict[str, np.ndarra
         elif o.kind == "reaction":
             if o.component in ("normal", "tangential"):
                 val = results.sliding_reaction(o.target)[:, 0 if o.component == "normal" else 1]
+            elif o.component in ("fx", "fy"):
+                val = results.joint_force(o.target)[:, 0 if o.component == "fx" else 1]
             else:
                 val = results.multipliers(o.target)[:, int(o.component)]
         elif o.kind == "friction":

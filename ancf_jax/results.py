@@ -20,7 +20,7 @@ import numpy as np
 
 from .errors import ModelError
 from .forces import AbstractOneSidedSpringDamper, SpringDamper
-from .joints import PrescribedCoordinate, SlidingJoint
+from .joints import Clamp, Coincident, FixedJoint, PrescribedCoordinate, PrescribedPoint, SlidingJoint
 from .sliding import AbstractSlidingDrive
 from .system import System
 
@@ -226,6 +226,21 @@ class Results:
         tangent = tangent / np.linalg.norm(tangent, axis=1, keepdims=True)
         normal = np.stack([-tangent[:, 1], tangent[:, 0]], axis=1)
         return np.stack([np.sum(force * normal, axis=1), np.sum(force * tangent, axis=1)], axis=1)
+
+    def joint_force(self, name: str) -> np.ndarray:
+        """Force [N] a joint applies, in global (x, y), shape (N, 2): for a sliding joint
+        on its body (+λ, as :meth:`sliding_reaction`); for a pin or clamp on the beam
+        node or body point it holds (the support reaction); for a revolute or fixed
+        joint and a prescribed point on its first point. From the multipliers: the
+        joints' first two equations are r_a − r_b (− the target), whose constraint force
+        −Φ_qᵀλ is −λ on point a and +λ on point b."""
+        names = [c.name for c in self.system.constraints]
+        c = self.system.constraints[self._index(tuple(names), name, "joint")]
+        if not isinstance(c, (Coincident, Clamp, FixedJoint, PrescribedPoint, SlidingJoint)):
+            raise ModelError(f"joint {name!r} ({type(c).__name__}) holds no point: no force output; "
+                             "use its multipliers (reaction index)")
+        lam = self.multipliers(name)[:, :2]
+        return lam if isinstance(c, SlidingJoint) else -lam
 
     def force_element(self, name: str):
         """The force element called ``name`` of the system."""

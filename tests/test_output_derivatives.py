@@ -147,3 +147,22 @@ def test_axial_force_and_strain_outputs():
     vel = jnp.asarray(np.column_stack([lam_dot * x, 0 * x, lam_dot + 0 * x, 0 * x]))
     n = beam.axial_force_with_rate(nodes, vel, 0.3)
     assert float(n) == pytest.approx(ea * (lam**2 - 1) / 2 + d * lam * lam_dot, rel=1e-12)
+
+
+def test_joint_forces_of_the_hanging_chain_pins():
+    """Reaction outputs fx, fy (the force a pin applies to the point it holds, global
+    frame): the two pins of the hanging chain each hold up half its weight (+W/2,
+    exactly: statics) and pull its ends apart with the horizontal tension (left −H,
+    right +H, equal and opposite to round-off); fx, fy are −λ of the pin's equations.
+    The scenario key: component = "fx"."""
+    sc = load_scenario("hanging_chain", ['outputs.columns.pin_fy={ type = "reaction", joint = "left", '
+                                         'component = "fy" }'])
+    cols = evaluate(sc.static_results(), list(sc.outputs)
+                    + [Output(f"{j}_force_{c}", "reaction", j, c) for j in ("left", "right") for c in ("fx", "fy")])
+    weight = 0.8 * 2.2 * G
+    assert cols["left_force_fy"][0] == pytest.approx(weight / 2, rel=1e-9)
+    assert cols["right_force_fy"][0] == pytest.approx(weight / 2, rel=1e-9)
+    assert cols["left_force_fx"][0] < -10.0
+    assert cols["right_force_fx"][0] == pytest.approx(-cols["left_force_fx"][0], rel=1e-12)
+    assert cols["left_force_fx"][0] == -cols["left_fx"][0]  # the index-0 multiplier λ_x
+    assert cols["pin_fy"][0] == cols["left_force_fy"][0]

@@ -29,6 +29,8 @@ MAX_CHECKED_TIMES = 100_001
 #: constraint equations of each joint type (clamp: by mode)
 JOINT_SIZE = {"pin": 2, "revolute": 2, "fixed": 3, "sliding": 2, "prescribed_point": 2,
               "prescribed_body": 1}
+#: joint types whose first two equations are a point's position (force outputs fx, fy)
+POINT_JOINTS = ("pin", "revolute", "clamp", "fixed", "sliding", "prescribed_point")
 
 
 def _names(names) -> str:
@@ -432,8 +434,11 @@ class Checker:
                 self.joint(path + ("joint",), o.joint)
                 self.exclusive(path, o, ("component", "index"), required=True)
                 j = self.spec.joints[o.joint]
-                if o.component is not None and j.type != "sliding":
+                if o.component in ("normal", "tangential") and j.type != "sliding":
                     raise Invalid(path + ("component",), f'normal and tangential need a sliding joint, '
+                                  f'"{o.joint}" is a {j.type} joint', "fx, fy, or index = 0 .. equations − 1")
+                if o.component in ("fx", "fy") and j.type not in POINT_JOINTS:
+                    raise Invalid(path + ("component",), f'fx and fy need a joint that holds a point, '
                                   f'"{o.joint}" is a {j.type} joint', "index = 0 .. equations − 1")
                 size = (4 if j.mode == "full" else 3) if j.type == "clamp" else JOINT_SIZE[j.type]
                 if o.index is not None and o.index >= size:
