@@ -21,7 +21,8 @@ import numpy as np
 from .element import mass as element_mass
 from .element.shape_functions import position as _position, shape_matrix, slope as _slope
 from .element import laws as _laws
-from .element.strain_energy import Formulation, axial_strain as _axial_strain, dissipative_force as _dissipative, strain_energy
+from .element.strain_energy import Formulation, axial_strain as _axial_strain, curvature as _curvature
+from .element.strain_energy import dissipative_force as _dissipative, strain_energy
 from .element.stress import axial_force as _axial_force, bending_stress
 from .errors import ModelError
 from .linalg import BlockTridiagonal
@@ -339,6 +340,25 @@ class Beam(eqx.Module):
             return n
         eps, eps_dot = jax.jvp(lambda nn: self.axial_strain(nn, s), (nodes,), (velocities,))
         return n + law.rate_force(eps, eps_dot, self.section.axial_stiffness)
+
+    def curvature_change(self, nodes, s):
+        """Curvature change κ − κ₀ [1/m] at arc length s (the formulation's measure;
+        positive when the centre line turns more counter-clockwise than at rest)."""
+        e, x, l, k = self.element_at(nodes, s)
+        e_ref = jnp.concatenate([self.mesh.reference_nodes[k], self.mesh.reference_nodes[k + 1]])
+        measure = self.formulation.curvature
+        return _curvature(e, x, l, measure) - _curvature(e_ref, x, l, measure)
+
+    def bending_moment_with_rate(self, nodes, velocities, s):
+        """Bending moment M = W'(κ − κ₀) + M_d [N·m] at arc length s: the elastic part
+        of the bending law (EI (κ − κ₀) without one) plus its rate part, with κ̇ from
+        the nodal velocities (any law: no linear-elastic section model needed)."""
+        law, ei = self.bending_law, self.section.bending_stiffness
+        dk, dk_dot = jax.jvp(lambda nn: self.curvature_change(nn, s), (nodes,), (velocities,))
+        if law is None:
+            return ei * dk
+        m = jax.grad(law.energy)(dk, ei)
+        return m + law.rate_force(dk, dk_dot, ei) if law.has_rate else m
 
     def elastic_axial_force(self, e, e_ref, x, l):
         """Elastic axial force N = W'(ε) [N] of the axial law (EA·ε without one)."""

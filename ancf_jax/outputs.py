@@ -27,7 +27,7 @@ from .errors import ModelError
 from .results import Results
 from .system import System
 
-KINDS = ("node", "point", "body", "sliding", "sliding_point", "stress", "axial", "reaction", "energy",
+KINDS = ("node", "point", "body", "sliding", "sliding_point", "stress", "axial", "bending", "reaction", "energy",
          "member", "friction", "drive")
 COMPONENTS = {
     "node": ("x", "y", "slope_x", "slope_y"),
@@ -37,6 +37,7 @@ COMPONENTS = {
     "sliding_point": ("x", "y"),
     "stress": ("sigma",),
     "axial": ("force", "strain"),
+    "bending": ("moment", "curvature"),
     "reaction": ("normal", "tangential", "fx", "fy", "0", "1", "2", "3"),
     "member": ("tension", "engaged"),
     "friction": ("force", "normal"),
@@ -55,7 +56,8 @@ DERIVATIVES = ("position", "velocity", "acceleration")
 #: multipliers are forces or, for rotational constraints, moments)
 UNITS = {"node": {"x": "m", "y": "m", "slope_x": "-", "slope_y": "-"}, "point": "m",
          "body": {"x": "m", "y": "m", "theta": "rad"}, "sliding": "m", "sliding_point": "m",
-         "stress": "Pa", "axial": {"force": "N", "strain": "-"}, "reaction": {"normal": "N", "tangential": "N", "fx": "N", "fy": "N"}, "member": {"tension": "N", "engaged": "-"},
+         "stress": "Pa", "axial": {"force": "N", "strain": "-"},
+         "bending": {"moment": "N*m", "curvature": "1/m"}, "reaction": {"normal": "N", "tangential": "N", "fx": "N", "fy": "N"}, "member": {"tension": "N", "engaged": "-"},
          "friction": "N", "drive": "N", "energy": "J"}
 
 
@@ -70,7 +72,9 @@ class Output:
             ``"sliding_point"`` (position of a sliding joint's point on its beam),
             ``"stress"`` (bending stress, Eq. 18), ``"axial"`` (axial force N [N],
             tension positive, elastic and rate part of the axial law, or axial strain ε
-            in the formulation's measure, at arc length ``s``), ``"reaction"`` (joint multiplier
+            in the formulation's measure, at arc length ``s``), ``"bending"`` (bending
+            moment M [N·m] of the bending law, elastic and rate part, or the curvature
+            change κ − κ₀ [1/m], at arc length ``s``), ``"reaction"`` (joint multiplier
             component, normal/tangential reaction of a sliding joint on its body, or
             ``fx``/``fy``: the force the joint applies in global x, y,
             :meth:`~ancf_jax.results.Results.joint_force`), ``"energy"``,
@@ -80,7 +84,8 @@ class Output:
         target: beam, body or joint name (unused for energy).
         component: see :data:`COMPONENTS`.
         node: node index (``"node"``); negative counts from the last node.
-        s: arc length [m] (``"point"``, ``"axial"``; ``"stress"`` if ``element`` is None).
+        s: arc length [m] (``"point"``, ``"axial"``, ``"bending"``; ``"stress"`` if
+            ``element`` is None).
         element, xi: element index (0-based) and ξ = x/l ∈ [0, 1] (``"stress"``).
         fibre: fibre distance y [m] (``"stress"``; default the outer fibre).
         measure: curvature measure of a stress (``"exact"``, ``"small_strain"``).
@@ -134,13 +139,19 @@ def output_units(outputs: Iterable[Output]) -> dict[str, str]:
     return {"t": "s", **{o.name: o.unit for o in outputs}}
 
 
-def axial_value(system: System, output: Output, q, v):
-    """Axial force [N] or strain [-] of an ``"axial"`` output at q, v (traceable)."""
+def section_value(system: System, output: Output, q, v):
+    """Axial force [N] or strain [-] of an ``"axial"`` output, bending moment [N·m] or
+    curvature change [1/m] of a ``"bending"`` output, at q, v (traceable)."""
     b = system.beam_names.index(output.target)
-    beam, nodes = system.beams[b], system.beam_nodes(q, b)
+    beam, nodes, s = system.beams[b], system.beam_nodes(q, b), float(output.s)
     if output.component == "strain":
-        return beam.axial_strain(nodes, float(output.s))
-    return beam.axial_force_with_rate(nodes, system.beam_nodes(v, b), float(output.s))
+        return beam.axial_strain(nodes, s)
+    if output.component == "curvature":
+        return beam.curvature_change(nodes, s)
+    rate = system.beam_nodes(v, b)
+    if output.component == "moment":
+        return beam.bending_moment_with_rate(nodes, rate, s)
+    return beam.axial_force_with_rate(nodes, rate, s)
 
 
 def position_value(system: System, output: Output, q):
@@ -205,8 +216,8 @@ def evaluate(results: Results, outputs: Iterable[Output]) -> dict[str, np.ndarra
         if o.derivative:
             f = jax.jit(jax.vmap(lambda q, v, a, o=o: output_value(results.system, o, q, v, a)))
             val = f(jnp.asarray(results.q), jnp.asarray(results.v), jnp.asarray(results.acc))
-        elif o.kind == "axial":
-            f = jax.jit(jax.vmap(lambda q, v, o=o: axial_value(results.system, o, q, v)))
+        elif o.kind in ("axial", "bending"):
+            f = jax.jit(jax.vmap(lambda q, v, o=o: section_value(results.system, o, q, v)))
             val = f(jnp.asarray(results.q), jnp.asarray(results.v))
         elif o.kind == "node":
             col = "x y slope_x slope_y".split().index(o.component)

@@ -254,8 +254,8 @@ def make_outputs(spec: S.ScenarioSpec) -> list[Output]:
             out.append(Output(name, "body", o.body, o.component, local=local, derivative=d))
         elif o.type in ("sliding", "sliding_point"):
             out.append(Output(name, o.type, o.joint, o.component, derivative=d))
-        elif o.type == "axial":
-            out.append(Output(name, "axial", o.beam, o.component, s=o.s))
+        elif o.type in ("axial", "bending"):
+            out.append(Output(name, o.type, o.beam, o.component, s=o.s))
         elif o.type == "stress":
             out.append(Output(name, "stress", o.beam, "sigma", s=o.s, element=o.element,
                               xi=o.xi if o.element is not None else None, fibre=o.fibre,

@@ -401,7 +401,7 @@ class Checker:
     def outputs(self):
         for name, o in self.spec.outputs.columns.items():
             path = ("outputs", "columns", name)
-            if o.type in ("node", "point", "stress", "axial"):
+            if o.type in ("node", "point", "stress", "axial", "bending"):
                 self.beam(path + ("beam",), o.beam)
             if o.type == "stress":
                 sec = self.spec.beams[o.beam].section
@@ -410,7 +410,7 @@ class Checker:
                                   f"key E in beams.{o.beam}.section (or no stress output)")
             if o.type == "node":
                 self.node_index(path + ("node",), o.beam, o.node)
-            elif o.type in ("point", "axial"):
+            elif o.type in ("point", "axial", "bending"):
                 self.arc_length(path + ("s",), o.beam, o.s)
             elif o.type == "body":
                 self.body(path + ("body",), o.body)

@@ -66,6 +66,7 @@ TABLES = [
     ('`[outputs.columns.NAME]` with `type = "sliding_point"`', S.SlidingPointOutput),
     ('`[outputs.columns.NAME]` with `type = "stress"`', S.StressOutput),
     ('`[outputs.columns.NAME]` with `type = "axial"`', S.AxialOutput),
+    ('`[outputs.columns.NAME]` with `type = "bending"`', S.BendingOutput),
     ('`[outputs.columns.NAME]` with `type = "reaction"`', S.ReactionOutput),
     ('`[outputs.columns.NAME]` with `type = "energy"`', S.EnergyOutput),
     ('`[outputs.columns.NAME]` with `type = "member"`', S.MemberOutput),

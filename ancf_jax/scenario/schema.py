@@ -578,6 +578,16 @@ class AxialOutput(Table):
     component: Literal[COMPONENTS["axial"]] = key("force", unit="N, -", doc="force or strain")
 
 
+class BendingOutput(Table):
+    """The bending moment M (of the bending law, elastic and rate part: any law) or the
+    curvature change κ − κ₀ (the formulation's measure) at arc length s."""
+
+    type: Literal["bending"] = key(doc="output type")
+    beam: str = key(doc="beam name")
+    s: float = key(unit="m", ge=0.0, allow_inf_nan=False, doc="reference arc length")
+    component: Literal[COMPONENTS["bending"]] = key("moment", unit="N m, 1/m", doc="moment or curvature")
+
+
 class StressOutput(Table):
     """Bending stress σ = −E y (κ − κ₀) (Eq. 18) at arc length s, or in an element at ξ."""
 
@@ -637,7 +647,8 @@ class DriveOutput(Table):
 
 
 Output = Annotated[Union[NodeOutput, PointOutput, BodyOutput, SlidingOutput, SlidingPointOutput,
-                         StressOutput, AxialOutput, ReactionOutput, EnergyOutput, MemberOutput, FrictionOutput,
+                         StressOutput, AxialOutput, BendingOutput, ReactionOutput, EnergyOutput, MemberOutput,
+                         FrictionOutput,
                          DriveOutput],
                    Field(discriminator="type")]
 
