@@ -127,6 +127,18 @@ def _parse(file: str, path: Path, text: str) -> dict:
         raise _toml_error(file, e) from None
 
 
+def _check_version(file: str, version) -> None:
+    """A file of another format version is refused with what this release reads (the
+    changes between versions: docs/scenario-format.md, "Changelog")."""
+    if isinstance(version, int) and not isinstance(version, bool) and version != S.FORMAT_VERSION:
+        from .._version import __version__
+        newer = "a newer ancf_jax wrote it" if version > S.FORMAT_VERSION else "no such version"
+        raise ScenarioError(file, ("version",), f"format version {version} ({newer}); ancf_jax {__version__} "
+                                                f"reads version {S.FORMAT_VERSION}",
+                            f"version = {S.FORMAT_VERSION} (the changes between versions: "
+                            "docs/scenario-format.md, Changelog)")
+
+
 def _schema_error(file: str, err: dict) -> ScenarioError:
     kind, ctx = err["type"], err.get("ctx") or {}
     where = locate(S.ScenarioSpec, err["loc"])
@@ -211,6 +223,7 @@ def load_scenario(source, overrides: Iterable[str] = ()):
                             f"{', '.join(shipped_scenarios())}") from None
     data = _parse(file, path, text)
     overridden = apply_overrides(data, overrides, file)
+    _check_version(file, data.get("version", S.FORMAT_VERSION))
     spec, checker = validate(data, file, base_dir=path.parent, overridden=overridden)
     return Scenario(spec, path=path, overrides=tuple(overrides or ()), lengths=checker.lengths,
                     elements=checker.elements)

@@ -211,3 +211,11 @@ def test_arc_lengths_at_the_very_end_of_a_beam_are_accepted(tmp_path):
     assert np.full(7, 1.0 / 7).sum() < 1.0
     system, _ = load_scenario(str(write(tmp_path, text))).model().build(assemble=False)
     assert system.sliding_names == ("slide",)
+
+
+def test_another_format_version_is_refused_naming_both():
+    from ancf_jax.scenario import ScenarioError, load_scenario
+    with pytest.raises(ScenarioError, match=r"format version 2 \(a newer ancf_jax wrote it\).*reads version 1"):
+        load_scenario("m1", ["version=2"])
+    with pytest.raises(ScenarioError, match="Changelog"):
+        load_scenario("m1", ["version=0"])
