@@ -37,8 +37,7 @@ def report_m1(results: Results, out_dir: str | Path, *, figures: bool = True,
     n = int(results.system.beams[0].mesh.n_elements)
     cols = evaluate(results, outputs)
     write_csv(out / f"m1_n{n}.csv", cols, precision)
-    sig_approx = results.element_stress("beam", m1_def.STRESS_ELEMENT, m1_def.STRESS_XI,
-                                        m1_def.STRESS_FIBRE, "small_strain")
+    sig_approx = results.stress("beam", m1_def.STRESS_S, m1_def.STRESS_FIBRE, "small_strain")
     s, sigma = results.stress_along("beam", 11)
     results.save_npz(out / f"m1_n{n}.npz", stress_s=s, stress_sigma=sigma,
                      sigma_e1_mid=cols["sigma_e1_mid"], sigma_e1_mid_small_strain=sig_approx,

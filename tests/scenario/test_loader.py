@@ -83,8 +83,12 @@ def test_m1_and_m2_output_columns(no_build):
         m1, m2 = load_scenario("m1"), load_scenario("m2")
     assert [o.name for o in m1.outputs] == ["tip_x", "tip_y", "sigma_e1_mid"]
     stress = m1.outputs[2]
-    assert (stress.kind, stress.target, stress.element, stress.xi, stress.fibre, stress.measure) == \
-        ("stress", "beam", 0, 0.5, 0.5e-3, "exact")
+    # a fixed material point, s = L/12 (E1's midpoint with 6 elements), the built-in
+    # model's column too
+    assert (stress.kind, stress.target, stress.s, stress.element, stress.fibre, stress.measure) == \
+        ("stress", "beam", 0.0335, None, 0.5e-3, "exact")
+    from ancf_jax.models.m1 import OUTPUTS
+    assert stress == OUTPUTS[2]
     assert [(o.name, o.kind, o.target, o.component) for o in m1.outputs[:2]] == \
         [("tip_x", "node", "beam", "x"), ("tip_y", "node", "beam", "y")]
     assert all(o.node == -1 for o in m1.outputs[:2])
