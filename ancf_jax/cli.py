@@ -6,8 +6,9 @@ scenario (m1, m2, …) or a scenario file (TOML or JSON); see ``ancf-jax COMMAND
 Exit status:
 
 * 0: done;
-* 1: a simulation failed (or a fit did not converge): what it computed up to then is
-  written, and one line on stderr says when and why;
+* 1: a simulation failed (or a fit did not converge, or a static equilibrium was not
+  found): what it computed up to then is written, and one line on stderr says when
+  and why;
 * 2: bad input: one line naming the option or scenario key and what it accepts. Every
   option, the scenario, the output location (``--out``) and the size of the run
   (``--max-steps``) are checked before anything is compiled;
@@ -25,6 +26,7 @@ import sys
 from pathlib import Path
 
 from ._version import __version__
+from .errors import StaticsError
 
 class _Parser(argparse.ArgumentParser):
     """argparse with one-line errors: ``ancf-jax run: error: argument --t-end: ...``."""
@@ -830,6 +832,9 @@ def main(argv: list[str] | None = None) -> int:
     except _UsageError as e:
         print(f"ancf-jax {args.command}: error: {e}", file=sys.stderr)
         return 2
+    except StaticsError as e:  # a static equilibrium (the command's, or a run's initial state) not found
+        print(f"ancf-jax {args.command}: {e}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:  # before or after the time loop (which keeps its results)
         print(f"ancf-jax {args.command}: interrupted (Ctrl-C) before any result was written", file=sys.stderr)
         return 130
