@@ -24,8 +24,9 @@ when it goes taut (:func:`ancf_jax.forces.kink_values`). A fixed step that strad
 such a point loses order. With ``locate_crossings=True`` a step that changes the
 element of a sliding coordinate, or the sign of a kink value, is split at the first of
 them: the crossing fraction θ is found by regula falsi (Illinois) on
-θ ↦ g(step(θ h)) − g*, g the sliding coordinate (g* the node) or the kink value
-(g* = 0), the step is taken to just past the crossing and then completed. (Crossing location and step retries are solver internals written as while
+θ ↦ g(step(θ h)) − g*, g the sliding coordinate (g* just past the node) or the kink
+value (g* just before 0, :data:`KINK_MARGIN`), and the step is completed from there.
+(Crossing location and step retries are solver internals written as while
 loops; gradients by reverse mode need both off, which is the default of
 :func:`ancf_jax.simulation.trajectory`.) The crossing search is written here rather
 than taken from optimistix: its only bracketing root finder is bisection, which gains
@@ -59,9 +60,10 @@ DEFAULT_HALVINGS = 6
 #: change of the kink value before the kink. A damped one-sided member's force jumps by
 #: c σℓ̇ when it engages, and implicit steps ending within ~(jump/m)·(θh)² of the jump
 #: have no solution (Newton fails: measured on tests/test_cable_machinery.py's rope, a
-#: band of 4e-7 m at h = 1 ms); the margin grows with h, the band with h², so 1e-2 holds
-#: for steps up to ~40 ms there. Measured effect on the undamped rope's error against
-#: the exact answer: orders 2.05, 2.07, 2.00 at h = 4 to 0.5 ms (1e-3: 1.99, 2.02, 1.97)
+#: band of 4e-7 m at h = 1 ms); the margin grows with h, the band with h², so a large
+#: enough step will land in the band (measured without failure at h = 4 to 0.25 ms).
+#: Measured effect on the undamped rope's error against the exact answer: orders 2.05,
+#: 2.07, 2.00 at h = 4 to 0.5 ms (1e-3: 1.99, 2.02, 1.97)
 KINK_MARGIN = 1e-2
 
 
