@@ -14,8 +14,9 @@ autodiff of the same f (:func:`output_value`, traceable, also used by the fits o
 
 from __future__ import annotations
 
-import dataclasses
 import csv
+import dataclasses
+import functools
 from pathlib import Path
 from typing import Iterable, Optional
 
@@ -139,7 +140,14 @@ def output_units(outputs: Iterable[Output]) -> dict[str, str]:
     return {"t": "s", **{o.name: o.unit for o in outputs}}
 
 
-def section_value(system: System, output: Output, q, v):
+@functools.partial(jax.jit, static_argnums=(0, 2))
+def _history(fn, system, output, q, v, acc):
+    """``fn(system, output, q, v, acc)`` at every row (compiled once per function,
+    output and shapes; later evaluations of the same column reuse it)."""
+    return jax.vmap(lambda qq, vv, aa: fn(system, output, qq, vv, aa))(q, v, acc)
+
+
+def section_value(system: System, output: Output, q, v, acc=None):
     """Axial force [N] or strain [-] of an ``"axial"`` output, bending moment [N·m] or
     curvature change [1/m] of a ``"bending"`` output, at q, v (traceable)."""
     b = system.beam_names.index(output.target)
@@ -213,12 +221,10 @@ def evaluate(results: Results, outputs: Iterable[Output]) -> dict[str, np.ndarra
     out = {"t": np.asarray(results.t)}
     energy = None
     for o in outputs:
-        if o.derivative:
-            f = jax.jit(jax.vmap(lambda q, v, a, o=o: output_value(results.system, o, q, v, a)))
-            val = f(jnp.asarray(results.q), jnp.asarray(results.v), jnp.asarray(results.acc))
-        elif o.kind in ("axial", "bending"):
-            f = jax.jit(jax.vmap(lambda q, v, o=o: section_value(results.system, o, q, v)))
-            val = f(jnp.asarray(results.q), jnp.asarray(results.v))
+        if o.derivative or o.kind in ("axial", "bending"):
+            fn = output_value if o.derivative else section_value
+            val = _history(fn, results.system, o, jnp.asarray(results.q), jnp.asarray(results.v),
+                           jnp.asarray(results.acc))
         elif o.kind == "node":
             col = "x y slope_x slope_y".split().index(o.component)
             val = results.node(o.target, -1 if o.node is None else o.node)[:, col]
