@@ -64,9 +64,9 @@ class AbstractForce(eqx.Module):
         """Generalized prescribed load, shape (n,)."""
 
     @abc.abstractmethod
-    def coordinates(self, system, q):
-        """Indices of q the element depends on and acts on (its generalized force is
-        zero elsewhere), int array of fixed length; or None: any coordinate. The Newton
+    def coordinates(self, system, q, t):
+        """Indices of q the element depends on and acts on at time t (its generalized
+        force is zero elsewhere), int array of fixed length; or None: any coordinate. The Newton
         matrix couples these coordinates (:func:`force_tangent`); None is exact for any
         force but couples all coordinates (cost O(n²)): an element acting at points
         returns its points' :meth:`~ancf_jax.points.AbstractPoint.coordinates`."""
@@ -122,7 +122,7 @@ def force_tangent(force: AbstractForce, system, q, v, t, damping_coef, load_fact
     coordinates of :meth:`AbstractForce.generalized_force`.
     """
     n = q.shape[0]
-    idx = force.coordinates(system, q)
+    idx = force.coordinates(system, q, t)
     idx = jnp.arange(n) if idx is None else jnp.asarray(idx)
     p = _selection(idx, n, q.dtype)
     k = idx.shape[0]
@@ -151,7 +151,7 @@ class BodyMassLoad(AbstractLoad):
         o = system.body_offset(self.body)
         return jnp.zeros_like(q).at[o:o + 2].add(system.bodies.mass[self.body] * a)
 
-    def coordinates(self, system, q):
+    def coordinates(self, system, q, t):
         return system.body_offset(self.body) + jnp.arange(2)
 
 
@@ -170,8 +170,10 @@ class BeamMassLoad(AbstractLoad):
         o = system.beam_offset(self.beam)
         return jnp.zeros_like(q).at[o:o + b.n_coordinates].add(jnp.reshape(b.gravity_load(a), (-1,)))
 
-    def coordinates(self, system, q):
+    def coordinates(self, system, q, t):
         return system.beam_offset(self.beam) + jnp.arange(system.beams[self.beam].n_coordinates)
+
+
 class AbstractReactionForce(eqx.Module):
     """A dissipative force that depends on joint reactions: Q(q, v, t, λ), e.g. Coulomb
     friction proportional to a normal reaction (:class:`ancf_jax.sliding.SlidingFriction`).
@@ -190,7 +192,7 @@ class AbstractReactionForce(eqx.Module):
         """Q_r(q, v, t, λ), shape (n,); its power v·Q_r must be ≤ 0."""
 
     @abc.abstractmethod
-    def coordinates(self, system, q):
+    def coordinates(self, system, q, t):
         """Indices of q the force depends on and acts on, int array of fixed length."""
 
     @abc.abstractmethod
@@ -204,7 +206,7 @@ def reaction_force_tangent(force: AbstractReactionForce, system, q, v, lam, t, d
     returns ``(P, A)``, A = −P ∂[Q_r; 0]/∂(q, λ) Pᵀ with ∂/∂q including c_v ∂/∂v
     (c_v = ``damping_coef``), so that its contribution is Pᵀ A P (non-symmetric)."""
     n, m = q.shape[0], lam.shape[0]
-    idx = jnp.concatenate([jnp.asarray(force.coordinates(system, q)),
+    idx = jnp.concatenate([jnp.asarray(force.coordinates(system, q, t)),
                            n + jnp.asarray(force.multiplier_indices(system))])
     p = _selection(idx, n + m, q.dtype)
 
@@ -230,7 +232,7 @@ class PointForce(AbstractLoad):
         f = self.force if self.time_function is None else self.force * self.time_function(t)
         return point_load(system, self.point, q, f)
 
-    def coordinates(self, system, q):
+    def coordinates(self, system, q, t):
         return self.point.coordinates(system, q)
 
 
@@ -245,7 +247,7 @@ class PointTorque(AbstractLoad):
         tau = self.torque if self.time_function is None else self.torque * self.time_function(t)
         return jnp.zeros_like(q).at[system.body_offset(self.body) + 2].add(tau)
 
-    def coordinates(self, system, q):
+    def coordinates(self, system, q, t):
         return jnp.array([system.body_offset(self.body) + 2])
 
 
@@ -280,11 +282,60 @@ class SpringDamper(AbstractForce):
         _, vjp = jax.vjp(lambda qq: self.length(system, qq), q)
         return vjp(-self.damping * ell_dot)[0]
 
-    def coordinates(self, system, q):
+    def coordinates(self, system, q, t):
         return jnp.concatenate([self.a.coordinates(system, q), self.b.coordinates(system, q)])
 
 
-class AbstractOneSidedSpringDamper(AbstractForce):
+class DirectedSpringDamper(AbstractForce):
+    """Linear spring-damper between two points along a fixed unit direction e (a
+    suspension of a lumped-mass chain, e.g. a pantograph's vertical stages): with the
+    stage length ℓ = e·(r_b − r_a), tension k (ℓ − ℓ₀) + c ℓ̇ [N] (pulling b towards a
+    along e). Sideways motion of the points is free, so a chain whose points move with
+    a vehicle keeps its stages along e.
+
+    Attributes:
+        direction: e, shape (2,), unit.
+        stiffness: k [N/m]. damping: c [N·s/m]. rest_length: ℓ₀ [m].
+    """
+
+    a: AbstractPoint
+    b: AbstractPoint
+    direction: jnp.ndarray
+    stiffness: jnp.ndarray
+    damping: jnp.ndarray
+    rest_length: jnp.ndarray
+
+    def length(self, system, q):
+        """ℓ = e·(r_b − r_a) [m]."""
+        return jnp.dot(self.direction, self.b.position(system, q) - self.a.position(system, q))
+
+    def potential(self, system, q, t):
+        return 0.5 * self.stiffness * (self.length(system, q) - self.rest_length) ** 2
+
+    def applied_force(self, system, q, v, t):
+        return jnp.zeros_like(q)
+
+    def dissipative_force(self, system, q, v):
+        ell_dot = jax.jvp(lambda qq: self.length(system, qq), (q,), (v,))[1]
+        _, vjp = jax.vjp(lambda qq: self.length(system, qq), q)
+        return vjp(-self.damping * ell_dot)[0]
+
+    def coordinates(self, system, q, t):
+        return jnp.concatenate([self.a.coordinates(system, q), self.b.coordinates(system, q)])
+
+
+class AbstractKinkedForce(AbstractForce):
+    """A force element whose law has kinks: points in (q, v) where its stiffness or
+    force jumps (a rope going taut, a contact closing). It names them as the zero
+    crossings of :meth:`kinks`, so that fixed steps can be split there
+    (:func:`kink_values`, ``locate_crossings`` of :mod:`ancf_jax.integrate`)."""
+
+    @abc.abstractmethod
+    def kinks(self, system, q, v):
+        """Values whose zero crossings are the kinks of the law, shape (k,), k fixed."""
+
+
+class AbstractOneSidedSpringDamper(AbstractKinkedForce):
     """A spring-damper between two points that acts on one side only: a rope, dropper or
     hanger (tension only) or a stop or buffer (compression only).
 
@@ -355,8 +406,19 @@ class AbstractOneSidedSpringDamper(AbstractForce):
         _, vjp = jax.vjp(lambda qq: self.length(system, qq), q)
         return vjp(-self.sense * d)[0]
 
-    def coordinates(self, system, q):
+    def coordinates(self, system, q, t):
         return jnp.concatenate([self.a.coordinates(system, q), self.b.coordinates(system, q)])
+
+    def kinks(self, system, q, v):
+        """With x = σ(ℓ − ℓ₀):
+
+        * x [m]: slack/taut (open/closed); the stiffness jumps from 0 to k there, and a
+          damped member's force jumps by c σℓ̇ when it engages;
+        * k x + c σℓ̇ [N] while x > 0, else k x: the force limit of the damper (a taut
+          member retracting fast reaches zero force before x does, and stays at zero).
+        """
+        x, ell_dot = jax.jvp(lambda qq: self.sense * (self.length(system, qq) - self.rest_length), (q,), (v,))
+        return jnp.stack([x, jnp.where(x > 0.0, self.stiffness * x + self.damping * ell_dot, self.stiffness * x)])
 
 
 class TensionOnlySpringDamper(AbstractOneSidedSpringDamper):
@@ -375,21 +437,17 @@ class CompressionOnlySpringDamper(AbstractOneSidedSpringDamper):
 
 def kink_values(system, q, v):
     """Values whose zero crossings are the kinks of the force laws of ``system``, shape
-    (2k,), or None when the system has none. For each one-sided spring-damper, with
-    x = σ(ℓ − ℓ₀):
-
-    * x [m]: slack/taut (open/closed); the stiffness jumps from 0 to k there, and a
-      damped member's force jumps by c σℓ̇ when it engages;
-    * k x + c σℓ̇ [N] while x > 0, else k x: the force limit of the damper (a taut
-      member retracting fast reaches zero force before x does, and stays at zero).
+    (k,), or None when the system has none: the :meth:`AbstractKinkedForce.kinks` of
+    its kinked force elements (one-sided spring-dampers, unilateral contacts).
 
     Fixed steps are split at their crossings by ``locate_crossings``
     (:mod:`ancf_jax.integrate`)."""
-    members = [f for f in system.forces if isinstance(f, AbstractOneSidedSpringDamper)]
+    members = [f for f in system.forces if isinstance(f, AbstractKinkedForce)]
     if not members:
         return None
-    out = []
-    for f in members:
-        x, ell_dot = jax.jvp(lambda qq: f.sense * (f.length(system, qq) - f.rest_length), (q,), (v,))
-        out += [x, jnp.where(x > 0.0, f.stiffness * x + f.damping * ell_dot, f.stiffness * x)]
-    return jnp.stack(out)
+    return jnp.concatenate([f.kinks(system, q, v) for f in members])
+
+
+def has_kinks(system) -> bool:
+    """Whether ``system`` has force elements with kinks (static)."""
+    return any(isinstance(f, AbstractKinkedForce) for f in system.forces)

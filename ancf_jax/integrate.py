@@ -41,7 +41,7 @@ import jax
 import jax.numpy as jnp
 
 from .failures import Failure
-from .forces import kink_values
+from .forces import has_kinks, kink_values
 from .integrators.base import AbstractIntegrator, Carry, StepInfo
 from ._control import run_if
 from .joints import SlidingJoint
@@ -198,7 +198,7 @@ def _crossing(system, integrator, carry, new, h, context, options):
 
     Returns (carry, StepInfo, crossed) for the completed step of size h."""
     slides = sliding_beams(system)
-    kinked = kink_values(system, carry.q, carry.v) is not None
+    kinked = has_kinks(system)
     if not options.locate_crossings or not (slides or kinked):
         return new, None, jnp.array(False)
     js = list(slides)

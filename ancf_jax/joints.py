@@ -19,6 +19,7 @@ import jax.numpy as jnp
 
 from .bodies import rotation
 from .element.strain_energy import cross2
+from .functions import AbstractPath
 from .points import AbstractPoint, BeamNode, BodyPoint
 
 
@@ -120,6 +121,20 @@ class PrescribedCoordinate(AbstractConstraint):
 
     def residual(self, system, q, t):
         return jnp.reshape(q[self.index] - self.function(t), (1,))
+
+
+class PathCoordinate(AbstractConstraint):
+    """A coordinate follows a path whose parameters are data: q[index] − p(t) = 0 (1
+    equation), p an :class:`~ancf_jax.functions.AbstractPath` (e.g.
+    :class:`~ancf_jax.functions.ConstantSpeed`: a vehicle at x = x₀ + v t), so a run
+    can be differentiated with respect to the speed."""
+
+    index: int = eqx.field(static=True)
+    path: AbstractPath
+    size: ClassVar[int] = 1
+
+    def residual(self, system, q, t):
+        return jnp.reshape(q[self.index] - self.path(t), (1,))
 
 
 class FixedCoordinate(AbstractConstraint):

@@ -37,12 +37,14 @@ from .bodies import RigidBodies
 from .element.laws import check_law
 from .element.strain_energy import Formulation
 from .errors import ConstraintError, ModelError, VelocityProjectionWarning
-from .forces import (BeamMassLoad, BodyMassLoad, CompressionOnlySpringDamper, PointForce, PointTorque,
+from .contact import AtArcLength, AtHorizontalPosition, MovingForce, UnilateralContact
+from .forces import (BeamMassLoad, BodyMassLoad, CompressionOnlySpringDamper, DirectedSpringDamper,
+                     PointForce, PointTorque,
                      SpringDamper, TensionOnlySpringDamper)
 from .mesh import BeamMesh, pad
 from .newton import ModifiedNewton
 from .section import Section
-from .functions import Constant
+from .functions import AbstractPath, Constant, ConstantSpeed
 from .sliding import DEFAULT_REGULARIZATION, SlidingDriveForce, SlidingFriction, SlidingServo
 from .system import State, System
 from .validation import (check_choice, check_finite, check_nonnegative, check_positive,
@@ -91,6 +93,49 @@ def beam_point(beam: str, s: float) -> PointRef:
 #: clamp modes (:class:`ancf_jax.joints.Clamp`)
 CLAMP_MODES = ("full", "direction", "exudyn")
 #: coordinates of a beam node and of a body, in the order of q (:meth:`Model.coordinate`)
+#: where a moving load's path is measured: horizontal coordinate or reference arc length
+ALONG = ("x", "arc_length")
+
+
+def _as_path(what: str, path) -> AbstractPath:
+    """A path: an AbstractPath as is; a function of t as ``ConstantSpeed(0, 0, f)``."""
+    if isinstance(path, AbstractPath):
+        return path
+    if callable(path):
+        return ConstantSpeed(0.0, 0.0, path)
+    raise ModelError(f"{what} must be a path (e.g. ancf_jax.functions.ConstantSpeed(start, speed)) or a "
+                     f"function of t [m], got {path!r}")
+
+
+def _hermite(nodes, lengths, s):
+    """r(s) [m] of the cubic Hermite (ANCF) curve of ``nodes`` (n + 1, 4), NumPy."""
+    edges = np.concatenate([[0.0], np.cumsum(lengths)])
+    k = int(np.clip(np.searchsorted(edges, s, side="right") - 1, 0, len(lengths) - 1))
+    l, xi = lengths[k], (s - edges[k]) / lengths[k]
+    a, b = nodes[k], nodes[k + 1]
+    return ((1 - 3 * xi**2 + 2 * xi**3) * a[:2] + l * (xi - 2 * xi**2 + xi**3) * a[2:]
+            + (3 * xi**2 - 2 * xi**3) * b[:2] + l * (xi**3 - xi**2) * b[2:])
+
+
+def _arc_length_at_x(nodes, lengths, x, what: str) -> float:
+    """Reference arc length of the point of the Hermite curve at horizontal coordinate
+    x (bisection; the curve's x monotonic), NumPy."""
+    lo, hi = 0.0, float(np.sum(lengths))
+    xa, xb = _hermite(nodes, lengths, lo)[0], _hermite(nodes, lengths, hi)[0]
+    if not min(xa, xb) <= x <= max(xa, xb):
+        raise ModelError(f"{what} starts at x = {x:g} m, off the beam (accepted {min(xa, xb):g}..{max(xa, xb):g} m)")
+    sense = np.sign(xb - xa)
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if sense * (_hermite(nodes, lengths, mid)[0] - x) < 0.0:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo < 1e-15 * max(1.0, hi):
+            break
+    return 0.5 * (lo + hi)
+
+
 NODE_COMPONENTS = ("x", "y", "slope_x", "slope_y")
 BODY_COMPONENTS = ("x", "y", "theta")
 
@@ -443,7 +488,10 @@ class Model:
         return name
 
     def prescribe_body(self, name: str, body: str, coordinate: str, function: Callable) -> str:
-        """Coordinate ``"x"``, ``"y"`` or ``"theta"`` of a body follows ``function(t)``."""
+        """Coordinate ``"x"``, ``"y"`` or ``"theta"`` of a body follows ``function(t)``
+        (a JAX-traceable function, static, or an
+        :class:`~ancf_jax.functions.AbstractPath` such as ``ConstantSpeed(x0, v)``,
+        whose parameters are data: differentiable, batchable)."""
         check_choice(f"coordinate of prescribed motion {name!r}", coordinate, ("x", "y", "theta"))
         if not callable(function):
             raise ModelError(f"function of prescribed motion {name!r} must be callable")
@@ -487,6 +535,149 @@ class Model:
         self._forces.append(("spring_damper", name, dict(a=a, b=b, stiffness=k, damping=c, rest_length=l0,
                                                          acts=acts)))
         return name
+
+    # ------------------------------------------------------------------ moving loads, contact
+    def moving_force(self, name: str, beam: str, force, *, path, along: str = "x",
+                     time_function: Callable | None = None) -> str:
+        """A point force [N] (fixed direction) that moves along ``beam``
+        (:class:`~ancf_jax.contact.MovingForce`), zero while it is off the beam.
+
+        Args:
+            force: F [N], shape (2,), scaled by ``time_function(t)`` if given.
+            path: where it is at time t: an :class:`~ancf_jax.functions.AbstractPath`
+                (``ConstantSpeed(start, speed)``: differentiable in the speed) or a
+                JAX-traceable function of t [m].
+            along: ``"x"`` (default): the path is the horizontal coordinate x(t) of the
+                loaded point (a vehicle at x = v t); ``"arc_length"``: the reference arc
+                length s(t).
+        """
+        f = tuple(check_vector(f"force of moving force {name!r}", force, 2))
+        check_choice(f"along of moving force {name!r}", along, ALONG)
+        p = _as_path(f"path of moving force {name!r}", path)
+        if time_function is not None and not callable(time_function):
+            raise ModelError(f"time_function of moving force {name!r} must be callable")
+        self._claim(name, "force")
+        self._forces.append(("moving_force", name, dict(beam=beam, force=f, path=p, along=along,
+                                                        time_function=time_function)))
+        return name
+
+    def moving_mass(self, name: str, beam: str, *, mass, path, along: str = "x",
+                    gravity: bool = True) -> str:
+        """A point mass [kg] that moves along ``beam`` at a prescribed position: a point
+        mass ``name`` on the sliding joint ``"<name>.slider"`` whose arc length
+        (``along="arc_length"``) or horizontal coordinate (``"x"``, default) follows
+        ``path`` (the constraint ``"<name>.drive"``: its reaction is the force that
+        keeps the mass moving). The sliding joint carries the mass's inertia, with the
+        convective terms of the moving point, exactly. The path must keep the mass on
+        the beam for the whole run.
+
+        Args:
+            mass: m [kg] > 0.
+            path: an :class:`~ancf_jax.functions.AbstractPath` or a function of t [m].
+            gravity: whether the model's gravity acts on the mass.
+        """
+        check_choice(f"along of moving mass {name!r}", along, ALONG)
+        p = _as_path(f"path of moving mass {name!r}", path)
+        if beam not in self._beams:
+            raise ModelError(f"moving mass {name!r} refers to beam {beam!r}, which does not exist "
+                             f"(beams: {', '.join(map(repr, self._beams)) or 'none'})")
+        spec = self._beams[beam]
+        nodes = np.asarray(spec.mesh.reference_nodes if spec.initial_nodes is None else spec.initial_nodes)
+        lengths = np.asarray(spec.mesh.element_lengths)[: int(spec.mesh.n_elements)]
+        p0 = float(p(0.0))
+        s0 = p0 if along == "arc_length" else _arc_length_at_x(nodes, lengths, p0, f"moving mass {name!r}")
+        length = float(np.sum(lengths))
+        if not 0.0 <= s0 <= length:
+            raise ModelError(f"moving mass {name!r} starts off beam {beam!r}: arc length {s0:g} m "
+                             f"(accepted 0..{length:g} m)")
+        self.add_point_mass(name, mass=mass, position=_hermite(nodes, lengths, s0), gravity=gravity)
+        self.slider(f"{name}.slider", name, beam, s0)
+        if along == "arc_length":
+            self.slider_drive(f"{name}.drive", f"{name}.slider", position=p)
+        else:
+            self.prescribe_body(f"{name}.drive", name, "x", p)
+        return name
+
+    def contact(self, name: str, point: PointRef, beam: str, *, stiffness, damping=0.0, side: int = 1,
+                offset=0.0) -> str:
+        """Unilateral penalty contact between ``point`` and ``beam`` at the beam's
+        closest point (:class:`~ancf_jax.contact.UnilateralContact`): normal force
+        k δ + max(c δ̇, −k δ) while the penetration δ > 0, else 0 (never pulls).
+
+        Args:
+            stiffness: k [N/m] > 0.
+            damping: c [N·s/m] >= 0.
+            side: +1 if the point is on the side of the beam's left normal (above a
+                beam running in +x), −1 if on the other side (below it: a pantograph
+                under a contact wire).
+            offset: gap g₀ [m] >= 0 at which contact begins (radii).
+        """
+        k = check_positive(f"stiffness of contact {name!r}", stiffness, "N/m")
+        c = check_nonnegative(f"damping of contact {name!r}", damping, "N*s/m")
+        g0 = check_nonnegative(f"offset of contact {name!r}", offset, "m")
+        if side not in (1, -1) or isinstance(side, bool):
+            raise ModelError(f"side of contact {name!r} must be 1 (left of the beam, above a beam "
+                             f"running in +x) or -1 (right, below), got {side!r}")
+        self._claim(name, "force")
+        self._forces.append(("contact", name, dict(point=point, beam=beam, stiffness=k, damping=c,
+                                                   side=float(side), offset=g0)))
+        return name
+
+    def lumped_chain(self, name: str, *, base, heights, masses, stiffness, damping=None,
+                     forces=None, path=None, gravity: bool = True) -> tuple[str, ...]:
+        """A vertical chain of point masses joined by spring-dampers: a current collector
+        (pantograph) or a suspension. Mass i (``"<name>.<i>"``, i = 1 at the bottom) is
+        at height ``heights[i-1]`` [m] above ``base`` (x, y) [m]; stage i
+        (``"<name>.stage<i>"``, a :class:`~ancf_jax.forces.DirectedSpringDamper` along
+        +y, unstressed as built) joins mass i to mass i − 1 (stage 1: to the base);
+        ``forces[i-1]`` [N] acts on mass i along +y (e.g. the static uplift on the
+        frame). The masses move vertically; their x is held at the base's x, or
+        follows ``path`` (an :class:`~ancf_jax.functions.AbstractPath` or a function
+        of t: a vehicle at x = x₀ + v t; the base stage works along y wherever the
+        masses are). Returns the mass names, bottom first.
+
+        Args:
+            heights: y of each mass above the base [m], increasing.
+            masses: m_i [kg] > 0.
+            stiffness: k_i [N/m] >= 0 of each stage.
+            damping: c_i [N·s/m] >= 0 of each stage (default 0).
+            forces: constant forces [N] along +y on each mass (default 0).
+        """
+        b = check_vector(f"base of chain {name!r}", base, 2)
+        h = check_finite(f"heights of chain {name!r}", heights).reshape(-1)
+        n = h.shape[0]
+        if n < 1 or np.any(np.diff(np.concatenate([[0.0], h])) <= 0.0):
+            raise ModelError(f"heights of chain {name!r} must be positive and increasing [m], got {list(h)}")
+        def per_mass(label, values, default, check):
+            if values is None:
+                return [default] * n
+            vals = np.atleast_1d(np.asarray(values, float))
+            if vals.shape != (n,):
+                raise ModelError(f"{label} of chain {name!r} must have one value per mass ({n}), got {values!r}")
+            return [float(check(f"{label} {i + 1} of chain {name!r}", v)) for i, v in enumerate(vals)]
+        m = per_mass("masses", masses, None, lambda w, v: check_positive(w, v, "kg"))
+        k = per_mass("stiffness", stiffness, None, lambda w, v: check_nonnegative(w, v, "N/m"))
+        c = per_mass("damping", damping, 0.0, lambda w, v: check_nonnegative(w, v, "N*s/m"))
+        f = per_mass("forces", forces, 0.0, lambda w, v: check_finite(w, v))
+        p = None if path is None else _as_path(f"path of chain {name!r}", path)
+        names = []
+        for i in range(n):
+            mass = f"{name}.{i + 1}"
+            self.add_point_mass(mass, mass=m[i], position=(b[0] if p is None else float(p(0.0)), b[1] + h[i]),
+                                gravity=gravity)
+            if p is None:
+                self.coordinate(f"{mass}.x", body_point(mass), "x")
+            else:
+                self.prescribe_body(f"{mass}.x", mass, "x", p)
+            below = ground(float(b[0]), float(b[1])) if i == 0 else body_point(names[-1])
+            self._claim(f"{name}.stage{i + 1}", "force")
+            self._forces.append(("directed_spring", f"{name}.stage{i + 1}", dict(
+                a=below, b=body_point(mass), direction=(0.0, 1.0), stiffness=k[i], damping=c[i],
+                rest_length=float(h[i] - (h[i - 1] if i else 0.0)))))
+            if f[i] != 0.0:
+                self.point_force(f"{mass}.force", body_point(mass), (0.0, f[i]))
+            names.append(mass)
+        return tuple(names)
 
     # ------------------------------------------------------------------ names
     @property
@@ -608,6 +799,8 @@ class Model:
             what = f"force {name!r}"
             if kind == "torque":
                 rotating(a["body"], what, "a rotation (torque)")
+            if kind in ("moving_force", "contact"):
+                beam(a["beam"], what)
             if kind == "mass_proportional" and a["item"] not in self._beams and a["item"] not in self._bodies:
                 known = ", ".join(map(repr, beams + bodies)) or "none"
                 raise ModelError(f"{what} refers to {a['item']!r}, which is no beam or body "
@@ -746,7 +939,7 @@ class Model:
                 else:
                     idx = skeleton.body_offset(body_of(ref.target)) + BODY_COMPONENTS.index(a["component"])
                 if a["function"] is not None:
-                    constraints.append(J.PrescribedCoordinate(name, idx, a["function"]))
+                    constraints.append(_prescribed(name, idx, a["function"]))
                 else:
                     value = q0[idx] if a["value"] is None else a["value"]
                     constraints.append(J.FixedCoordinate(name, idx, jnp.asarray(value, float)))
@@ -755,7 +948,7 @@ class Model:
             elif kind == "prescribe_body":
                 k = body_of(a["body"], what)
                 idx = 3 * k + {"x": 0, "y": 1, "theta": 2}[a["coordinate"]]
-                constraints.append(J.PrescribedCoordinate(name, idx, a["function"]))
+                constraints.append(_prescribed(name, idx, a["function"]))
         for j, name in enumerate(slider_names):
             a = self._sliders[name]
             what = f"sliding joint {name!r}"
@@ -771,8 +964,8 @@ class Model:
                                                      jnp.zeros(())))
         for kind, name, slider, a in self._drives:
             if kind == "position":
-                constraints.append(J.PrescribedCoordinate(
-                    name, skeleton.sliding_offset + slider_names.index(slider), a["function"]))
+                constraints.append(_prescribed(name, skeleton.sliding_offset + slider_names.index(slider),
+                                               a["function"]))
         joint_index = {c.name: k for k, c in enumerate(constraints)}
         reaction_forces = tuple(
             SlidingFriction(name, joint_index[slider], jnp.asarray(a["mu"], float),
@@ -798,6 +991,20 @@ class Model:
                        "compression": CompressionOnlySpringDamper}[a["acts"]]
                 forces.append(law(name, pa, pb, jnp.asarray(a["stiffness"], float),
                                   jnp.asarray(a["damping"], float), jnp.asarray(l0, float)))
+            elif kind == "moving_force":
+                where = (AtHorizontalPosition if a["along"] == "x" else AtArcLength)(a["path"])
+                forces.append(MovingForce(name, beam_of(a["beam"]), where, jnp.asarray(a["force"], float),
+                                          a["time_function"]))
+            elif kind == "contact":
+                forces.append(UnilateralContact(name, resolve(a["point"], what), beam_of(a["beam"]), a["side"],
+                                                jnp.asarray(a["stiffness"], float),
+                                                jnp.asarray(a["damping"], float), jnp.asarray(a["offset"], float)))
+            elif kind == "directed_spring":
+                forces.append(DirectedSpringDamper(name, resolve(a["a"], what), resolve(a["b"], what),
+                                                   jnp.asarray(a["direction"], float),
+                                                   jnp.asarray(a["stiffness"], float),
+                                                   jnp.asarray(a["damping"], float),
+                                                   jnp.asarray(a["rest_length"], float)))
             elif kind == "mass_proportional":
                 acc = jnp.asarray(a["acceleration"], float)
                 if a["item"] in self._bodies:
@@ -844,6 +1051,14 @@ ASSEMBLY_NEWTON = ModifiedNewton(tolerance=1e-12, max_iterations=50, contraction
 
 
 @eqx.filter_jit
+def _prescribed(name: str, index: int, function):
+    """A coordinate following a function of t: PathCoordinate for a path (data),
+    PrescribedCoordinate for a plain (static) function."""
+    if isinstance(function, AbstractPath):
+        return J.PathCoordinate(name, index, function)
+    return J.PrescribedCoordinate(name, index, function)
+
+
 def _project_position(system, q, t, root_finder):
     return dae.project_position(system, q, t, chain_factor=dae.mass_chain_factor(system),
                                 root_finder=root_finder, implicit=False)

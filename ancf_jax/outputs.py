@@ -29,7 +29,7 @@ from .results import Results
 from .system import System
 
 KINDS = ("node", "point", "body", "sliding", "sliding_point", "stress", "axial", "bending", "reaction", "energy",
-         "member", "friction", "drive")
+         "member", "friction", "drive", "contact", "load")
 COMPONENTS = {
     "node": ("x", "y", "slope_x", "slope_y"),
     "point": ("x", "y"),
@@ -43,6 +43,8 @@ COMPONENTS = {
     "member": ("tension", "engaged"),
     "friction": ("force", "normal"),
     "drive": ("force",),
+    "contact": ("force", "gap", "engaged", "s"),
+    "load": ("y", "x", "s", "on_beam"),
     "energy": ("kinetic", "gravity", "strain", "springs", "dissipated", "external", "constraint",
                "total", "balance_error"),
 }
@@ -59,7 +61,9 @@ UNITS = {"node": {"x": "m", "y": "m", "slope_x": "-", "slope_y": "-"}, "point": 
          "body": {"x": "m", "y": "m", "theta": "rad"}, "sliding": "m", "sliding_point": "m",
          "stress": "Pa", "axial": {"force": "N", "strain": "-"},
          "bending": {"moment": "N*m", "curvature": "1/m"}, "reaction": {"normal": "N", "tangential": "N", "fx": "N", "fy": "N"}, "member": {"tension": "N", "engaged": "-"},
-         "friction": "N", "drive": "N", "energy": "J"}
+         "friction": "N", "drive": "N", "energy": "J",
+         "contact": {"force": "N", "gap": "m", "engaged": "-", "s": "m"},
+         "load": {"y": "m", "x": "m", "s": "m", "on_beam": "-"}}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -81,7 +85,10 @@ class Output:
             :meth:`~ancf_jax.results.Results.joint_force`), ``"energy"``,
             ``"member"`` (force [N] and engaged state of a spring-damper named ``target``),
             ``"friction"`` (friction force and normal reaction [N] of a sliding
-            friction), ``"drive"`` (tangential force [N] of a sliding drive).
+            friction), ``"drive"`` (tangential force [N] of a sliding drive),
+            ``"contact"`` (normal force [N], gap [m], engaged state, contact arc length
+            [m] of a unilateral contact), ``"load"`` (position y, x [m] and arc length
+            s [m] of the beam point under a moving force, and whether it is on the beam).
         target: beam, body or joint name (unused for energy).
         component: see :data:`COMPONENTS`.
         node: node index (``"node"``); negative counts from the last node.
@@ -259,6 +266,10 @@ def evaluate(results: Results, outputs: Iterable[Output]) -> dict[str, np.ndarra
             val = results.friction(o.target)[:, 0 if o.component == "force" else 1]
         elif o.kind == "drive":
             val = results.drive_force(o.target)
+        elif o.kind == "contact":
+            val = results.contact(o.target)[:, COMPONENTS["contact"].index(o.component)]
+        elif o.kind == "load":
+            val = results.moving_load(o.target)[:, ("s", "x", "y", "on_beam").index(o.component)]
         elif o.kind == "member":
             val = results.member(o.target)[:, 0 if o.component == "tension" else 1]
         else:

@@ -19,8 +19,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from .errors import ModelError
+from .contact import MovingForce, UnilateralContact
 from .forces import AbstractOneSidedSpringDamper, SpringDamper
-from .joints import Clamp, Coincident, FixedJoint, PrescribedCoordinate, PrescribedPoint, SlidingJoint
+from .joints import (Clamp, Coincident, FixedJoint, PathCoordinate, PrescribedCoordinate, PrescribedPoint,
+                     SlidingJoint)
 from .sliding import AbstractSlidingDrive
 from .system import System
 
@@ -54,6 +56,25 @@ def _member_history(system: System, force, q, v):
                               jnp.ones(())])
         return jnp.stack([force.tension(system, qq, vv), force.engaged(system, qq).astype(qq.dtype)])
     return jax.vmap(one)(q, v)
+
+
+@eqx.filter_jit
+def _contact_history(system: System, contact, q, v):
+    """(normal force [N], gap [m], engaged 0/1, contact arc length s* [m]) per row."""
+    def one(qq, vv):
+        s, _ = contact.contact_point(system, qq)
+        return jnp.stack([contact.normal_force(system, qq, vv), contact.gap(system, qq),
+                          contact.engaged(system, qq).astype(qq.dtype), s])
+    return jax.vmap(one)(q, v)
+
+
+@eqx.filter_jit
+def _load_history(system: System, load, q, t):
+    """(s [m], x [m], y [m], on the beam 0/1) of a moving force's point per row."""
+    def one(qq, tt):
+        s, r, on = load.load_point(system, qq, tt)
+        return jnp.stack([s, r[0], r[1], on.astype(qq.dtype)])
+    return jax.vmap(one)(q, t)
 
 
 @eqx.filter_jit
@@ -256,6 +277,24 @@ class Results:
             raise ModelError(f"force element {name!r} is not a spring-damper")
         return np.asarray(_member_history(self.system, f, jnp.asarray(self.q), jnp.asarray(self.v)))
 
+    def contact(self, name: str) -> np.ndarray:
+        """Normal force F_n [N] (>= 0), gap g [m] (negative: penetration), engaged state
+        (1: closed) and contact arc length s* [m] on the beam of a unilateral contact
+        named ``name`` (:class:`~ancf_jax.contact.UnilateralContact`), shape (N, 4)."""
+        f = self.force_element(name)
+        if not isinstance(f, UnilateralContact):
+            raise ModelError(f"force element {name!r} is not a contact")
+        return np.asarray(_contact_history(self.system, f, jnp.asarray(self.q), jnp.asarray(self.v)))
+
+    def moving_load(self, name: str) -> np.ndarray:
+        """Arc length s [m] and position x, y [m] of the beam point under a moving force
+        named ``name``, and whether it is on the beam (1) (:class:`~ancf_jax.contact.MovingForce`),
+        shape (N, 4): y is the deflection under the load."""
+        f = self.force_element(name)
+        if not isinstance(f, MovingForce):
+            raise ModelError(f"force element {name!r} is not a moving force")
+        return np.asarray(_load_history(self.system, f, jnp.asarray(self.q), jnp.asarray(self.t)))
+
     def friction(self, name: str) -> np.ndarray:
         """Friction force F [N] on the body along +s (its reaction acts on the beam) and
         the normal reaction N [N] of a sliding friction named ``name``, shape (N, 2)."""
@@ -273,10 +312,11 @@ class Results:
             return np.asarray(_drive_history(self.system, drives[name], jnp.asarray(self.q),
                                              jnp.asarray(self.v), jnp.asarray(self.t)))
         joint = next((c for c in self.system.constraints if c.name == name
-                      and isinstance(c, PrescribedCoordinate)
+                      and isinstance(c, (PrescribedCoordinate, PathCoordinate))
                       and c.index >= self.system.sliding_offset), None)
         if joint is None:
-            known = list(drives) + [c.name for c in self.system.constraints if isinstance(c, PrescribedCoordinate)
+            known = list(drives) + [c.name for c in self.system.constraints
+                                    if isinstance(c, (PrescribedCoordinate, PathCoordinate))
                                     and c.index >= self.system.sliding_offset]
             raise ModelError(f"no sliding drive named {name!r} (known: {', '.join(map(repr, known)) or 'none'})")
         j = joint.index - self.system.sliding_offset

@@ -88,7 +88,7 @@ class AbstractSlidingDrive(AbstractForce):
     def applied_force(self, system, q, v, t):
         return tangential_load(system, self.beam, self.sliding, q, self.tangential_force(system, q, v, t))
 
-    def coordinates(self, system, q):
+    def coordinates(self, system, q, t):
         return SlidingPoint(self.beam, self.sliding).coordinates(system, q)
 
 
@@ -168,7 +168,7 @@ class SlidingFriction(AbstractReactionForce):
         c = self._joint(system)
         return tangential_load(system, c.beam, c.sliding, q, self.tangential_force(system, q, v, lam))
 
-    def coordinates(self, system, q):
+    def coordinates(self, system, q, t):
         c = self._joint(system)
         return SlidingPoint(c.beam, c.sliding).coordinates(system, q)
 

@@ -44,7 +44,7 @@ class CubicSpring(AbstractConservativeForce):
         u = jnp.sqrt(d @ d) - self.rest
         return 0.5 * self.k * u**2 + 0.25 * self.k3 * u**4
 
-    def coordinates(self, system, q):
+    def coordinates(self, system, q, t):
         return self.a.coordinates(system, q)
 
 

@@ -1,0 +1,253 @@
+"""Moving loads and unilateral moving contact on beams (the moving-load problem and its
+contact version: a vehicle crossing a bridge, a trolley on a track rope, a pantograph
+under a contact wire).
+
+Where on a beam. A moving load acts at the material point under a prescribed position,
+either at the reference arc length s(t) (:class:`AtArcLength`) or at the point whose
+current horizontal coordinate is x(t) (:class:`AtHorizontalPosition`: a vehicle moving at
+speed v along a track is at x = v t, not at arc length v t). The positions are
+:class:`~ancf_jax.functions.AbstractPath` objects, whose parameters (e.g. the speed of
+:class:`~ancf_jax.functions.ConstantSpeed`) are data: runs are differentiable with
+respect to them.
+
+Searches on the deformed beam (traced, differentiable, fixed iteration counts, so a
+point crosses nodes without re-tracing):
+
+* :func:`arc_length_under`: s with r_x(s) = x. The node interval holding x is found
+  from the nodes' x (the beam's x must be monotonic along s over its active nodes,
+  as a track, rope or wire is), then Newton's method on r_x(s) − x from the linear
+  interpolation in that interval (:data:`SEARCH_ITERATIONS` steps);
+* :func:`closest_arc_length`: the closest point of the beam to a point p, the root of
+  f(s) = r'(s)·(r(s) − p) by Newton's method (f' = r''·(r − p) + r'·r') started from
+  the point under p. At the closest point the gap's derivative along s vanishes, so a
+  contact force derived from the gap by autodiff acts along the beam's normal.
+
+Force elements:
+
+* :class:`MovingForce`: a point force F f(t) [N] at the moving material point, zero
+  while the point is off the beam (a load entering at one end and leaving at the
+  other). Q = S(s)ᵀ F (the material point's virtual displacement), with ∂s/∂q of the
+  horizontal search in its Newton-matrix linearization.
+* :class:`UnilateralContact`: a penalty contact between a point (e.g. the head of a
+  pantograph) and a beam at its closest point: gap g = σ n̂·(p − r(s*)) − g₀ [m]
+  (n̂ the beam's left unit normal, σ = ``side``: +1 if the point is on the side of n̂,
+  −1 if on the other; g₀ an offset, e.g. the radii), penetration δ = −g, and the
+  normal force [N]
+
+      F_n = k δ + d,   d = max(c δ̇, −k δ)   while δ > 0,   F_n = 0 otherwise,
+
+  so the contact never pulls (the damper is limited as in
+  :class:`~ancf_jax.forces.AbstractOneSidedSpringDamper`). Parts: potential ½ k δ₊²,
+  dissipation d δ̇ ≥ 0. Its kinks (contact closing, the force reaching zero) are
+  located in time by ``locate_crossings`` (:class:`~ancf_jax.forces.AbstractKinkedForce`).
+  No contact while the closest point is beyond an end of the beam.
+
+A moving *mass* is a point mass on a sliding joint whose arc length or horizontal
+position is prescribed (:meth:`ancf_jax.model.Model.moving_mass`): the sliding joint
+carries its inertia, with the convective terms of the moving point, exactly.
+"""
+
+from __future__ import annotations
+
+import abc
+from typing import Callable, Optional
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from .forces import AbstractKinkedForce, AbstractLoad
+from .functions import AbstractPath
+from .points import AbstractPoint, element_coordinates
+
+#: Newton steps of the searches on the deformed beam (from the linear interpolation in
+#: the node interval: the residual falls below 1e-14 m after 3 on the tests' wires)
+SEARCH_ITERATIONS = 4
+
+
+def _node_interval(system, beam: int, q, x):
+    """(k, s₀): the element whose nodes' x bracket x (clamped to the active elements)
+    and the linearly interpolated arc length in it."""
+    b = system.beams[beam]
+    nodes = system.beam_nodes(q, beam)
+    n = b.mesh.n_elements
+    xs = nodes[:, 0]
+    sense = jnp.sign(xs[n] - xs[0])
+    behind = b.mesh.active_nodes & (sense * xs <= sense * x)
+    k = jnp.clip(jnp.sum(behind) - 1, 0, n - 1)
+    x0, x1 = xs[k], xs[k + 1]
+    frac = jnp.clip((x - x0) / (x1 - x0), 0.0, 1.0)
+    inside = (sense * x >= sense * xs[0]) & (sense * x <= sense * xs[n])
+    return b.mesh.node_arc_lengths[k] + frac * b.mesh.element_lengths[k], inside
+
+
+def arc_length_under(system, beam: int, q, x):
+    """Reference arc length s [m] of the point of beam ``beam`` whose current
+    horizontal coordinate is x [m] (module docstring), and whether x lies between the
+    beam's end points. Differentiable in q and x; s is clamped to [0, L]."""
+    b = system.beams[beam]
+    nodes = system.beam_nodes(q, beam)
+    s, inside = _node_interval(system, beam, q, x)
+    for _ in range(SEARCH_ITERATIONS):
+        s = s - (b.position(nodes, s)[0] - x) / b.slope(nodes, s)[0]
+    return jnp.clip(s, 0.0, b.mesh.length), inside
+
+
+def closest_arc_length(system, beam: int, q, p):
+    """Reference arc length s* [m] of the point of beam ``beam`` closest to p [m]
+    (module docstring), and whether it lies on the beam (0 ≤ s* ≤ L). Differentiable
+    in q and p; s* is clamped to [0, L]."""
+    b = system.beams[beam]
+    nodes = system.beam_nodes(q, beam)
+    s, _ = _node_interval(system, beam, q, p[0])
+    for _ in range(SEARCH_ITERATIONS):
+        r = b.position(nodes, s)
+        r1, r2 = jax.jvp(lambda z: b.slope(nodes, z), (s,), (jnp.ones_like(s),))
+        s = s - jnp.dot(r1, r - p) / (jnp.dot(r2, r - p) + jnp.dot(r1, r1))
+    length = b.mesh.length
+    return jnp.clip(s, 0.0, length), (s >= 0.0) & (s <= length)
+
+
+class AbstractMovingLocation(eqx.Module):
+    """Where on a beam a moving load acts at time t (module docstring)."""
+
+    path: eqx.AbstractVar[AbstractPath]
+
+    @abc.abstractmethod
+    def locate(self, system, beam: int, q, t):
+        """(s [m], on_beam): the reference arc length of the loaded material point
+        (clamped to [0, L]) and whether the load is on the beam."""
+
+
+class AtArcLength(AbstractMovingLocation):
+    """The material point at reference arc length s = ``path(t)`` [m]."""
+
+    path: AbstractPath
+
+    def locate(self, system, beam: int, q, t):
+        s = self.path(t)
+        length = system.beams[beam].mesh.length
+        return jnp.clip(s, 0.0, length), (s >= 0.0) & (s <= length)
+
+
+class AtHorizontalPosition(AbstractMovingLocation):
+    """The material point whose current horizontal coordinate is x = ``path(t)`` [m]
+    (:func:`arc_length_under`)."""
+
+    path: AbstractPath
+
+    def locate(self, system, beam: int, q, t):
+        return arc_length_under(system, beam, q, self.path(t))
+
+
+class MovingForce(AbstractLoad):
+    """A point force F·f(t) [N] (fixed direction) at a moving material point of beam
+    ``beam`` (module docstring); zero while the point is off the beam.
+
+    Attributes:
+        beam: beam index (static).
+        location: :class:`AtArcLength` or :class:`AtHorizontalPosition`.
+        force: F [N], shape (2,).
+        time_function: optional JAX-traceable scale t ↦ f(t) (static); None: 1.
+    """
+
+    beam: int = eqx.field(static=True)
+    location: AbstractMovingLocation
+    force: jnp.ndarray
+    time_function: Optional[Callable] = eqx.field(static=True, default=None)
+
+    def load_point(self, system, q, t):
+        """(s [m], position (2,) [m], on_beam) of the loaded material point."""
+        s, on = self.location.locate(system, self.beam, q, t)
+        return s, system.beams[self.beam].position(system.beam_nodes(q, self.beam), s), on
+
+    def applied_force(self, system, q, v, t):
+        s, on = self.location.locate(system, self.beam, q, t)
+        f = self.force if self.time_function is None else self.force * self.time_function(t)
+        beam = system.beams[self.beam]
+        _, vjp = jax.vjp(lambda qq: beam.position(system.beam_nodes(qq, self.beam), s), q)
+        return vjp(jnp.where(on, f, 0.0))[0]
+
+    def coordinates(self, system, q, t):
+        s, _ = self.location.locate(system, self.beam, q, t)
+        return element_coordinates(system, self.beam, s)
+
+
+class UnilateralContact(AbstractKinkedForce):
+    """Penalty contact between ``point`` and beam ``beam`` at the closest point
+    (module docstring).
+
+    Attributes:
+        point: the contacting point (a body point, a node of another beam...).
+        beam: beam index (static).
+        side: σ = +1 if the point is on the side of the beam's left normal n̂ (above a
+            beam running in +x), −1 if on the other side (static).
+        stiffness: k [N/m] > 0.
+        damping: c [N·s/m] >= 0.
+        offset: g₀ [m]: the gap at which contact begins (radii of wire and shoe).
+    """
+
+    point: AbstractPoint
+    beam: int = eqx.field(static=True)
+    side: float = eqx.field(static=True)
+    stiffness: jnp.ndarray
+    damping: jnp.ndarray
+    offset: jnp.ndarray
+
+    def contact_point(self, system, q):
+        """(s* [m], on_beam): the closest point of the beam to the contacting point."""
+        return closest_arc_length(system, self.beam, q, self.point.position(system, q))
+
+    def _gap_at(self, system, q, s):
+        b = system.beams[self.beam]
+        nodes = system.beam_nodes(q, self.beam)
+        r1 = b.slope(nodes, s)
+        n = jnp.stack([-r1[1], r1[0]]) / jnp.linalg.norm(r1)
+        return self.side * jnp.dot(n, self.point.position(system, q) - b.position(nodes, s)) - self.offset
+
+    def gap(self, system, q):
+        """g = σ n̂·(p − r(s*)) − g₀ [m] (negative: penetration), whether or not s* is
+        on the beam."""
+        return self._gap_at(system, q, self.contact_point(system, q)[0])
+
+    def _penetration(self, system, q):
+        """δ = −g while the closest point is on the beam, else −1 m (open)."""
+        s, on = self.contact_point(system, q)
+        return jnp.where(on, -self._gap_at(system, q, s), -1.0)
+
+    def _damper(self, system, q, v):
+        delta, delta_dot = jax.jvp(lambda qq: self._penetration(system, qq), (q,), (v,))
+        e = jnp.maximum(delta, 0.0)
+        return jnp.where(e > 0.0, jnp.maximum(self.damping * delta_dot, -self.stiffness * e), 0.0)
+
+    def normal_force(self, system, q, v):
+        """F_n [N] >= 0 (class and module docstrings)."""
+        e = jnp.maximum(self._penetration(system, q), 0.0)
+        return self.stiffness * e + self._damper(system, q, v)
+
+    def engaged(self, system, q):
+        """Whether the contact is closed (δ > 0)."""
+        return self._penetration(system, q) > 0.0
+
+    def potential(self, system, q, t):
+        return 0.5 * self.stiffness * jnp.maximum(self._penetration(system, q), 0.0) ** 2
+
+    def applied_force(self, system, q, v, t):
+        return jnp.zeros_like(q)
+
+    def dissipative_force(self, system, q, v):
+        d = self._damper(system, q, v)
+        _, vjp = jax.vjp(lambda qq: self._penetration(system, qq), q)
+        return vjp(-d)[0]
+
+    def coordinates(self, system, q, t):
+        s, _ = self.contact_point(system, q)
+        return jnp.concatenate([self.point.coordinates(system, q), element_coordinates(system, self.beam, s)])
+
+    def kinks(self, system, q, v):
+        """δ [m] (contact closing or opening; the stiffness jumps from 0 to k, a damped
+        contact's force by c δ̇) and k δ + c δ̇ [N] while δ > 0 (the force reaching
+        zero: the damper's limit), else k δ."""
+        delta, delta_dot = jax.jvp(lambda qq: self._penetration(system, qq), (q,), (v,))
+        return jnp.stack([delta, jnp.where(delta > 0.0, self.stiffness * delta + self.damping * delta_dot,
+                                           self.stiffness * delta)])
