@@ -58,6 +58,7 @@ import jax.numpy as jnp
 
 from .forces import AbstractKinkedForce, AbstractLoad
 from .functions import AbstractPath
+from .element.shape_functions import shape_functions, shape_functions_dx
 from .points import AbstractPoint, element_coordinates
 
 #: Newton steps of the searches on the deformed beam (from the linear interpolation in
@@ -66,8 +67,9 @@ SEARCH_ITERATIONS = 4
 
 
 def _node_interval(system, beam: int, q, x):
-    """(k, s₀): the element whose nodes' x bracket x (clamped to the active elements)
-    and the linearly interpolated arc length in it."""
+    """(element coordinates (8,) as (4, 2), element length, arc length of its first node,
+    local arc length): the element whose nodes' x bracket x (clamped to the active
+    elements) and the linear interpolation in it."""
     b = system.beams[beam]
     nodes = system.beam_nodes(q, beam)
     n = b.mesh.n_elements
@@ -76,36 +78,83 @@ def _node_interval(system, beam: int, q, x):
     behind = b.mesh.active_nodes & (sense * xs <= sense * x)
     k = jnp.clip(jnp.sum(behind) - 1, 0, n - 1)
     x0, x1 = xs[k], xs[k + 1]
+    length = b.mesh.element_lengths[k]
     frac = jnp.clip((x - x0) / (x1 - x0), 0.0, 1.0)
-    inside = (sense * x >= sense * xs[0]) & (sense * x <= sense * xs[n])
-    return b.mesh.node_arc_lengths[k] + frac * b.mesh.element_lengths[k], inside
+    e = jnp.reshape(jnp.concatenate([nodes[k], nodes[k + 1]]), (4, 2))
+    return e, length, b.mesh.node_arc_lengths[k], frac * length
+
+
+def _under_residual(e, x, length, u):
+    """r_x(u) − x in the element."""
+    return shape_functions(u, length) @ e[:, 0] - x
+
+
+def _closest_residual(e, p, length, u):
+    """f(u) = r'(u)·(r(u) − p) in the element."""
+    return jnp.dot(shape_functions_dx(u, length) @ e, shape_functions(u, length) @ e - p)
+
+
+def _implicit_root(residual):
+    """Newton's method on ``residual(e, p, l, u) = 0`` for u from u₀
+    (:data:`SEARCH_ITERATIONS` steps), differentiated by the implicit function theorem
+    (du = −∂f/∂(e, p, l)·d(e, p, l) / ∂f/∂u; the start u₀ carries no derivative), so
+    derivatives of any order do not pass through the iterations."""
+
+    @jax.custom_jvp
+    def root(e, p, length, u0):
+        u = u0
+        for _ in range(SEARCH_ITERATIONS):
+            f, f_u = jax.jvp(lambda z: residual(e, p, length, z), (u,), (jnp.ones_like(u),))
+            u = u - f / f_u
+        return u
+
+    @root.defjvp
+    def _jvp(primals, tangents):
+        e, p, length, u0 = primals
+        de, dp, dl, _ = tangents
+        u = root(e, p, length, u0)
+        f_u = jax.jvp(lambda z: residual(e, p, length, z), (u,), (jnp.ones_like(u),))[1]
+        df = jax.jvp(lambda a, b, c: residual(a, b, c, u), (e, p, length), (de, dp, dl))[1]
+        return u, -df / f_u
+
+    return root
+
+
+_under_root = _implicit_root(_under_residual)
+_closest_root = _implicit_root(_closest_residual)
 
 
 def arc_length_under(system, beam: int, q, x):
     """Reference arc length s [m] of the point of beam ``beam`` whose current
     horizontal coordinate is x [m] (module docstring), and whether x lies between the
-    beam's end points. Differentiable in q and x; s is clamped to [0, L]."""
-    b = system.beams[beam]
+    beam's end points. Newton's method within the element whose nodes bracket x (a
+    monotonic cubic there holds the root). Differentiable in q and x."""
+    e, length, s_k, u0 = _node_interval(system, beam, q, x)
+    u = jnp.clip(_under_root(e, x, length, jax.lax.stop_gradient(u0)), 0.0, length)
     nodes = system.beam_nodes(q, beam)
-    s, inside = _node_interval(system, beam, q, x)
-    for _ in range(SEARCH_ITERATIONS):
-        s = s - (b.position(nodes, s)[0] - x) / b.slope(nodes, s)[0]
-    return jnp.clip(s, 0.0, b.mesh.length), inside
+    xs, n = nodes[:, 0], system.beams[beam].mesh.n_elements
+    inside = (jnp.minimum(xs[0], xs[n]) <= x) & (x <= jnp.maximum(xs[0], xs[n]))
+    return s_k + u, inside
+
+
+def _closest(system, beam: int, q, p):
+    """(s*, on the beam, element coordinates (4, 2), local arc length, element length)."""
+    e, length, s_k, u0 = _node_interval(system, beam, q, p[0])
+    u = _closest_root(e, p, length, jax.lax.stop_gradient(u0))
+    total = system.beams[beam].mesh.length
+    on = (s_k + u >= 0.0) & (s_k + u <= total)
+    u = jnp.clip(u, 0.0, length)
+    return s_k + u, on, e, u, length
 
 
 def closest_arc_length(system, beam: int, q, p):
     """Reference arc length s* [m] of the point of beam ``beam`` closest to p [m]
-    (module docstring), and whether it lies on the beam (0 ≤ s* ≤ L). Differentiable
-    in q and p; s* is clamped to [0, L]."""
-    b = system.beams[beam]
-    nodes = system.beam_nodes(q, beam)
-    s, _ = _node_interval(system, beam, q, p[0])
-    for _ in range(SEARCH_ITERATIONS):
-        r = b.position(nodes, s)
-        r1, r2 = jax.jvp(lambda z: b.slope(nodes, z), (s,), (jnp.ones_like(s),))
-        s = s - jnp.dot(r1, r - p) / (jnp.dot(r2, r - p) + jnp.dot(r1, r1))
-    length = b.mesh.length
-    return jnp.clip(s, 0.0, length), (s >= 0.0) & (s <= length)
+    (module docstring), and whether it lies on the beam (0 ≤ s* ≤ L). The search runs
+    in the element under p (:func:`arc_length_under`'s interval): a closest point
+    beyond that element's nodes is taken at the node, which differs from the true one
+    by the change of slope across the node times the gap (zero for a point in
+    contact). Differentiable in q and p."""
+    return _closest(system, beam, q, p)[:2]
 
 
 class AbstractMovingLocation(eqx.Module):
@@ -198,32 +247,37 @@ class UnilateralContact(AbstractKinkedForce):
         """(s* [m], on_beam): the closest point of the beam to the contacting point."""
         return closest_arc_length(system, self.beam, q, self.point.position(system, q))
 
-    def _gap_at(self, system, q, s):
-        b = system.beams[self.beam]
-        nodes = system.beam_nodes(q, self.beam)
-        r1 = b.slope(nodes, s)
+    def _gaps(self, system, q):
+        """(g, on the beam): the gap g = σ n̂·(p − r(s*)) − g₀ [m] (negative:
+        penetration) at the closest point, whether or not it is on the beam."""
+        p = self.point.position(system, q)
+        _, on, e, u, length = _closest(system, self.beam, q, p)
+        r1 = shape_functions_dx(u, length) @ e
         n = jnp.stack([-r1[1], r1[0]]) / jnp.linalg.norm(r1)
-        return self.side * jnp.dot(n, self.point.position(system, q) - b.position(nodes, s)) - self.offset
+        return self.side * jnp.dot(n, p - shape_functions(u, length) @ e) - self.offset, on
 
     def gap(self, system, q):
         """g = σ n̂·(p − r(s*)) − g₀ [m] (negative: penetration), whether or not s* is
         on the beam."""
-        return self._gap_at(system, q, self.contact_point(system, q)[0])
+        return self._gaps(system, q)[0]
 
     def _penetration(self, system, q):
         """δ = −g while the closest point is on the beam, else −1 m (open)."""
-        s, on = self.contact_point(system, q)
-        return jnp.where(on, -self._gap_at(system, q, s), -1.0)
+        g, on = self._gaps(system, q)
+        return jnp.where(on, -g, -1.0)
 
-    def _damper(self, system, q, v):
-        delta, delta_dot = jax.jvp(lambda qq: self._penetration(system, qq), (q,), (v,))
+    def _state(self, system, q, v):
+        """(δ, ∂δ/∂q, δ̇, d): penetration, its gradient and rate, limited damper force."""
+        delta, grad = jax.value_and_grad(lambda qq: self._penetration(system, qq))(q)
+        rate = jnp.dot(grad, v)
         e = jnp.maximum(delta, 0.0)
-        return jnp.where(e > 0.0, jnp.maximum(self.damping * delta_dot, -self.stiffness * e), 0.0)
+        d = jnp.where(e > 0.0, jnp.maximum(self.damping * rate, -self.stiffness * e), 0.0)
+        return delta, grad, rate, d
 
     def normal_force(self, system, q, v):
         """F_n [N] >= 0 (class and module docstrings)."""
-        e = jnp.maximum(self._penetration(system, q), 0.0)
-        return self.stiffness * e + self._damper(system, q, v)
+        delta, _, _, d = self._state(system, q, v)
+        return self.stiffness * jnp.maximum(delta, 0.0) + d
 
     def engaged(self, system, q):
         """Whether the contact is closed (δ > 0)."""
@@ -236,9 +290,8 @@ class UnilateralContact(AbstractKinkedForce):
         return jnp.zeros_like(q)
 
     def dissipative_force(self, system, q, v):
-        d = self._damper(system, q, v)
-        _, vjp = jax.vjp(lambda qq: self._penetration(system, qq), q)
-        return vjp(-d)[0]
+        _, grad, _, d = self._state(system, q, v)
+        return -d * grad
 
     def coordinates(self, system, q, t):
         s, _ = self.contact_point(system, q)
@@ -248,6 +301,6 @@ class UnilateralContact(AbstractKinkedForce):
         """δ [m] (contact closing or opening; the stiffness jumps from 0 to k, a damped
         contact's force by c δ̇) and k δ + c δ̇ [N] while δ > 0 (the force reaching
         zero: the damper's limit), else k δ."""
-        delta, delta_dot = jax.jvp(lambda qq: self._penetration(system, qq), (q,), (v,))
-        return jnp.stack([delta, jnp.where(delta > 0.0, self.stiffness * delta + self.damping * delta_dot,
+        delta, _, rate, _ = self._state(system, q, v)
+        return jnp.stack([delta, jnp.where(delta > 0.0, self.stiffness * delta + self.damping * rate,
                                            self.stiffness * delta)])

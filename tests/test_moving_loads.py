@@ -14,8 +14,8 @@
   contact and the contact stiffness against finite differences.
 * A lumped-mass chain's natural frequencies against its 2 × 2 eigenproblem.
 
-Compiled programs are shared: the string runs (speed and EI are data) at two meshes,
-the bounce runs (step is data), one gradient program.
+Compiled programs are shared: one for the string runs (speed, EI and the padded mesh
+are data), one for the bounce runs (damping and step are data), one gradient program.
 """
 
 import equinox as eqx
@@ -26,7 +26,7 @@ import pytest
 
 from ancf_jax import mesh
 from ancf_jax.functions import ConstantSpeed
-from ancf_jax.integrate import RunOptions
+from ancf_jax.integrate import DEFAULT_HALVINGS, RunOptions
 from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
 from ancf_jax.model import Model, body_point, node
 from ancf_jax.results import Results
@@ -54,7 +54,7 @@ def string_model(n, speed, bending_stiffness):
     m.pin("a", node("string", 0))
     m.pin("b", node("string", -1))
     m.moving_force("P", "string", (0.0, -P), path=ConstantSpeed(0.0, speed))
-    return m.build()
+    return m.build(pad_to=32)
 
 
 def modal_series(t, x, v, bending_stiffness=0.0, modes=4000):
@@ -70,18 +70,19 @@ def modal_series(t, x, v, bending_stiffness=0.0, modes=4000):
 
 #: (v / c, EI [N·m²], step [s]); the beam's step is finer so that its time error
 #: (~1e-4 relative at 2e-4 s) stays below its mesh error at 32 elements
-CASES = {"string 0.2c": (0.2, 1e-6, 2e-4), "string 0.5c": (0.5, 1e-6, 2e-4), "beam 0.5c": (0.5, 0.5, 1e-4)}
+CASES = {"string 0.2c": (0.2, 1e-6, 4e-4), "string 0.5c": (0.5, 1e-6, 4e-4), "beam 0.5c": (0.5, 0.5, 1e-4)}
 
 
 @pytest.fixture(scope="module")
 def string_runs():
-    """Every case at 16 and 32 elements (one program per mesh: speed and EI are data)."""
+    """Every case at 16 and 32 elements (one program: the meshes are padded to 32
+    elements, speed and EI are data)."""
     out = {}
     for n in (16, 32):
         system, state = string_model(n, 1.0, 1e-6)
         for name, (frac, ei, h) in CASES.items():
             sys = eqx.tree_at(lambda s: (s.forces[0].location.path.speed, s.beams[0].section.second_moment),
-                              system, (jnp.asarray(frac * C), jnp.asarray(ei / 1e9)))
+                              system, (jnp.asarray(frac * C, float), jnp.asarray(ei / 1e9, float)))
             t_end = round(ELL / (frac * C) / h / 50) * 50 * h
             run = run_fixed(sys, state, GeneralizedAlpha().forward_only(), h, t_end)
             out[name, n] = Results(sys, run.t, run.q, run.v, run.acc, run.lam, run.work, np.zeros(len(run.t)))
@@ -135,3 +136,166 @@ def test_slope_jump_at_the_moving_force(string_runs, case, x_load):
     assert left.sum() >= 4 and right.sum() >= 4
     jump = np.polyfit(nodes[right, 0], nodes[right, 1], 1)[0] - np.polyfit(nodes[left, 0], nodes[left, 1], 1)[0]
     assert jump == pytest.approx(P / (T_STRING * (1 - frac**2)), rel=3e-3)
+
+
+# ---------------------------------------------------------------------------- bounce
+M_BALL, K_C, ZETA, V0, GAP0 = 1.0, 1e4, 0.1, 1.0, 0.01
+T_BOUNCE = 0.06
+
+
+def bounce_model():
+    """A point mass falling (no gravity, speed V0) onto a rigid track (every node
+    clamped) from a gap GAP0, through a penalty contact k = K_C (damping set per run)."""
+    m = Model(gravity=(0.0, 0.0))
+    m.add_beam("track", mesh.straight((-0.5, 0.0), (1.0, 0.0), 1.0, 2), Section(2e11, 1e-4, 1e-8, 0.8))
+    for i in range(3):
+        m.clamp(f"c{i}", "track", i)
+    m.add_point_mass("ball", mass=M_BALL, position=(0.1, GAP0), velocity=(0.0, -V0))
+    m.contact("contact", body_point("ball"), "track", stiffness=K_C, damping=1.0)
+    return m.build()
+
+
+def bounce_closed_form(zeta):
+    """(contact time [s], restitution) of a mass m hitting a spring-damper k, c at V0
+    whose force k δ + c δ̇ cannot pull: δ = (V0/ω_d) e^{−ζωt} sin ω_d t until the force
+    vanishes at ω_d t* = π − atan(2ζ√(1−ζ²) / (1 − 2ζ²)); then free flight at the
+    speed there, out of the penetration δ(t*)."""
+    w = np.sqrt(K_C / M_BALL)
+    wd = w * np.sqrt(1 - zeta**2)
+    ts = (np.pi - np.arctan(2 * zeta * np.sqrt(1 - zeta**2) / (1 - 2 * zeta**2))) / wd
+    decay = np.exp(-zeta * w * ts)
+    delta = V0 / wd * decay * np.sin(wd * ts)
+    rate = V0 * decay * (np.cos(wd * ts) - zeta * w / wd * np.sin(wd * ts))
+    return ts + delta / -rate, -rate / V0
+
+
+STEPS = (1e-3, 5e-4, 2.5e-4)
+
+
+@pytest.fixture(scope="module")
+def bounce_runs():
+    """Undamped and damped (ζ = ZETA) bounces with located events at STEPS (one
+    program: damping and the step are data; the same runs without located events are
+    ``python -m benchmarks.contact_events``). Step retries on, as in ``simulate``: a
+    damped contact's force jumps by c V0 when it closes, and an implicit step ending
+    just inside it has no solution."""
+    system, state = bounce_model()
+    out = {}
+    for zeta in (0.0, ZETA):
+        sys = eqx.tree_at(lambda s: s.forces[0].damping, system,
+                          jnp.asarray(2 * zeta * np.sqrt(K_C * M_BALL), float))
+        for h in STEPS:
+            run = run_fixed(sys, state, GeneralizedAlpha().forward_only(), h, T_BOUNCE, chunk=60,
+                            options=RunOptions(locate_crossings=True, max_halvings=DEFAULT_HALVINGS))
+            assert run.status == 0
+            out[zeta, h] = run
+    return out
+
+
+def bounce_errors(run, zeta):
+    """(contact time, restitution) errors: the time out of contact from the final free
+    flight, y(t) = y_end + v_end (t − t_end) = 0."""
+    t_c, e = bounce_closed_form(zeta)
+    y, vy = run.q[-1, 1], run.v[-1, 1]
+    t_out = run.t[-1] - y / vy
+    return abs(t_out - GAP0 / V0 - t_c), abs(vy / V0 - e)
+
+
+def test_undamped_bounce_located_contact_is_second_order(bounce_runs):
+    """ζ = 0: contact time π/ω and restitution 1. Located events: restitution errors
+    2.0e-5, 1.8e-6, 4.6e-7 at h = 1, 0.5, 0.25 ms; without (benchmarks.contact_events):
+    1.2e-3, 1.6e-4, 6.9e-5 (erratic, about first order), 60 to 150 times larger.
+    Contact time second order either way (measured 2.6e-5 to 1.7e-6 s)."""
+    located = np.array([bounce_errors(bounce_runs[0.0, h], 0.0) for h in STEPS])
+    assert np.all(observed_orders(located[:, 0]) > 1.9)
+    assert np.all(observed_orders(located[:, 1]) > 1.8)
+    assert located[-1, 1] < 1e-6 and located[-1, 0] < 2e-6
+
+
+def test_damped_bounce_against_the_closed_form(bounce_runs):
+    """ζ = 0.1 (restitution 0.73): the contact's force jumps by c V0 when it closes, and
+    generalized-α's acceleration variable carries that jump's error on: restitution
+    first order with or without located events (measured 7.8e-3, 3.8e-3, 1.9e-3
+    located), as for the damped rope (docs/cable-machinery.md); contact time second
+    order (2.9e-5 to 1.8e-6 s)."""
+    located = np.array([bounce_errors(bounce_runs[ZETA, h], ZETA) for h in STEPS])
+    assert np.all(observed_orders(located[:, 0]) > 1.9)
+    assert np.all((observed_orders(located[:, 1]) > 0.9) & (observed_orders(located[:, 1]) < 1.2))
+    assert located[-1, 1] < 2.5e-3 and located[-1, 0] < 2.5e-6
+
+
+# ---------------------------------------------------------------------------- gradients
+def pantograph_model():
+    """A one-mass current collector (0.1 kg, uplift 1 N, gravity off) under the string
+    of :func:`string_model` (8 elements), starting at x = 0.2 m in static contact (1 mm
+    penetration) and moving at x = 0.2 + v t, pressed up against the string through a
+    contact k = 1e3 N/m, c = 1 N·s/m."""
+    m = Model(gravity=(0.0, 0.0))
+    track = mesh.straight((0.0, 0.0), (1.0, 0.0), L, 8)
+    nodes = np.asarray(track.reference_nodes).copy()
+    nodes[:, 0] *= 1 + EPS0
+    nodes[:, 2] = 1 + EPS0
+    m.add_beam("string", track, Section(1e9, EA / 1e9, 1e-15, RHOA), initial_nodes=nodes)
+    m.pin("a", node("string", 0))
+    m.pin("b", node("string", -1))
+    head = m.lumped_chain("collector", base=(0.2, -0.5), heights=[0.501], masses=[0.1], stiffness=[0.0],
+                          forces=[1.0], path=ConstantSpeed(0.2, 1.0))[0]
+    m.contact("contact", body_point(head), "string", stiffness=1e3, damping=1.0, side=-1)
+    return m.build()
+
+
+def test_gradients_of_contact_force_statistics():
+    """d mean(F_n²)/d(v, k) over 0.025 s (the head pushed into the wire, contact kept),
+    forward mode through the implicit steps (the search for the contact point
+    differentiated implicitly), against central differences (steps 1e-4 relative;
+    Newton tolerance 1e-12 as in the friction gradients)."""
+    from ancf_jax.newton import ModifiedNewton
+    from ancf_jax.simulation import trajectory
+
+    system, state = pantograph_model()
+    contact = next(f for f in system.forces if f.name == "contact")
+    k_contact = system.forces.index(contact)
+    k_path = next(i for i, c in enumerate(system.constraints) if c.name == "collector.1.x")
+
+    def statistic(p):
+        sys = eqx.tree_at(lambda s: (s.constraints[k_path].path.speed, s.forces[k_contact].stiffness),
+                          system, (p[0], p[1]))
+        seg, _ = trajectory(sys, state, GeneralizedAlpha(root_finder=ModifiedNewton(tolerance=1e-12)),
+                            t_end=0.025, dt=5e-4)
+        f = jax.vmap(lambda q, v: sys.forces[k_contact].normal_force(sys, q, v))(seg.q, seg.v)
+        return jnp.mean(f**2), jnp.min(f)
+
+    @jax.jit
+    def value_and_jacobian(p):
+        # one program for the derivative and the differences: the primal of the JVPs
+        values, tangents = jax.vmap(lambda e: jax.jvp(statistic, (p,), (e,)))(jnp.eye(2))
+        return values[0][0], values[1][0], tangents[0]
+
+    p0 = jnp.array([1.0, 1e3])
+    value, smallest, grad = value_and_jacobian(p0)
+    assert smallest > 0.0  # contact kept: no event in the differentiated run
+    steps = 1e-4 * p0
+    fd = np.array([(value_and_jacobian(p0 + d)[0] - value_and_jacobian(p0 - d)[0]) / (2 * d[i])
+                   for i, d in enumerate(jnp.diag(steps))])
+    assert np.all(np.abs(np.asarray(grad)) > 0)
+    np.testing.assert_allclose(grad, fd, rtol=1e-6)
+
+
+def test_lumped_chain_frequencies():
+    """A two-stage chain (base spring k₁ to mass m₁, k₂ between m₁ and m₂; gravity off)
+    against the eigenvalues of K = [[k₁ + k₂, −k₂], [−k₂, k₂]], M = diag(m₁, m₂); the
+    masses' x held, so these are its only two degrees of freedom."""
+    from scipy.linalg import eigh
+
+    from ancf_jax.modal import modal_analysis
+
+    m = Model(gravity=(0.0, 0.0))
+    names = m.lumped_chain("pantograph", base=(0.0, 0.0), heights=[0.3, 0.5], masses=[15.0, 7.0],
+                           stiffness=[160.0, 8000.0], damping=[100.0, 10.0], forces=[70.0, 0.0])
+    assert names == ("pantograph.1", "pantograph.2")
+    system, state = m.build()
+    modes = modal_analysis(system, state.q)
+    k = np.array([[160.0 + 8000.0, -8000.0], [-8000.0, 8000.0]])
+    w = np.sqrt(eigh(k, np.diag([15.0, 7.0]), eigvals_only=True))
+    assert modes.angular_frequencies.shape == (2,)
+    np.testing.assert_allclose(modes.angular_frequencies, w, rtol=1e-10)
