@@ -299,3 +299,33 @@ def test_lumped_chain_frequencies():
     w = np.sqrt(eigh(k, np.diag([15.0, 7.0]), eigvals_only=True))
     assert modes.angular_frequencies.shape == (2,)
     np.testing.assert_allclose(modes.angular_frequencies, w, rtol=1e-10)
+
+
+def test_moving_mass_on_an_incline():
+    """A moving mass at x = x₀ + v t on a rigid incline (every node clamped, slope
+    angle β, gravity): it starts on the track with velocity v (1, −tan β) (the joints
+    set it), follows the track, and the track's and the drive's forces balance its
+    weight at constant velocity."""
+    beta, v, mass, g = 0.3, 2.0, 3.0, 9.81
+    m = Model(gravity=(0.0, -g))
+    m.add_beam("track", mesh.straight((0.0, 0.0), (np.cos(beta), -np.sin(beta)), 2.0, 2),
+               Section(2e11, 1e-4, 1e-8, 0.8))
+    for i in range(3):
+        m.clamp(f"c{i}", "track", i)
+    m.moving_mass("cart", "track", mass=mass, path=ConstantSpeed(0.3, v))
+    system, state = m.build()
+    pose = np.asarray(state.q[:2])
+    np.testing.assert_allclose(pose, [0.3, -0.3 * np.tan(beta)], atol=1e-12)
+    np.testing.assert_allclose(np.asarray(state.v[:2]), [v, -v * np.tan(beta)], atol=1e-10)
+    run = run_fixed(system, state, GeneralizedAlpha().forward_only(), 0.01, 0.2, chunk=20)
+    res = Results(system, run.t, run.q, run.v, run.acc, run.lam, run.work, np.zeros(len(run.t)))
+    np.testing.assert_allclose(res.body("cart")[:, 0], 0.3 + v * res.t, atol=1e-10)
+    np.testing.assert_allclose(res.body("cart")[:, 1], -(0.3 + v * res.t) * np.tan(beta), atol=1e-9)
+    # forces on the cart at constant velocity: the track's N n̂ (normal to it: no
+    # friction) and the drive's H x̂ balance the weight: N = m g / cos β, H = −m g tan β
+    track_force = res.joint_force("cart.slider")
+    drive = -res.multipliers("cart.drive")[:, 0]
+    normal = np.array([np.sin(beta), np.cos(beta)])
+    np.testing.assert_allclose(track_force, np.outer(np.full(len(res.t), mass * g / np.cos(beta)), normal),
+                               rtol=1e-8)
+    np.testing.assert_allclose(drive, -mass * g * np.tan(beta), rtol=1e-8)
