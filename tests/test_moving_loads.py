@@ -110,6 +110,16 @@ def test_string_deflection_under_a_moving_force(string_runs, case):
     assert 0.8 < observed_orders(errors)[0] < 1.3
 
 
+def test_moving_force_energy_balance(string_runs):
+    """The moving force's power enters the energy balance as external work: kinetic +
+    strain energy = work of the load, up to the time discretization of the work
+    integral (undamped, the whole crossing at 0.5c: 6.2e-10, 1.9e-10, 5.7e-11 J of
+    2.2e-7 J at h = 0.4, 0.2, 0.1 ms, order 1.7; the same with ρ∞ = 1)."""
+    energy = string_runs["string 0.5c", 32].energy()
+    assert energy["external"][-1] > 2e-7
+    assert np.max(np.abs(energy["balance_error"])) < 3.5e-3 * energy["external"][-1]
+
+
 def test_beam_deflection_under_a_moving_force(string_runs):
     """With EI = 0.5 N·m² (bending and tension comparable in the first modes) against
     the beam series: second order in the mesh (measured 0.72 %, 0.20 %)."""
