@@ -39,7 +39,7 @@ COMPONENTS = {
     "stress": ("sigma",),
     "axial": ("force", "strain"),
     "bending": ("moment", "curvature"),
-    "reaction": ("normal", "tangential", "fx", "fy", "0", "1", "2", "3"),
+    "reaction": ("normal", "tangential", "fx", "fy", "moment", "0", "1", "2", "3"),
     "member": ("tension", "engaged"),
     "friction": ("force", "normal"),
     "drive": ("force",),
@@ -60,7 +60,7 @@ DERIVATIVES = ("position", "velocity", "acceleration")
 UNITS = {"node": {"x": "m", "y": "m", "slope_x": "-", "slope_y": "-"}, "point": "m",
          "body": {"x": "m", "y": "m", "theta": "rad"}, "sliding": "m", "sliding_point": "m",
          "stress": "Pa", "axial": {"force": "N", "strain": "-"},
-         "bending": {"moment": "N*m", "curvature": "1/m"}, "reaction": {"normal": "N", "tangential": "N", "fx": "N", "fy": "N"}, "member": {"tension": "N", "engaged": "-"},
+         "bending": {"moment": "N*m", "curvature": "1/m"}, "reaction": {"normal": "N", "tangential": "N", "fx": "N", "fy": "N", "moment": "N*m"}, "member": {"tension": "N", "engaged": "-"},
          "friction": "N", "drive": "N", "energy": "J",
          "contact": {"force": "N", "gap": "m", "engaged": "-", "s": "m"},
          "load": {"y": "m", "x": "m", "s": "m", "on_beam": "-"}}
@@ -82,7 +82,9 @@ class Output:
             change κ − κ₀ [1/m], at arc length ``s``), ``"reaction"`` (joint multiplier
             component, normal/tangential reaction of a sliding joint on its body, or
             ``fx``/``fy``: the force the joint applies in global x, y,
-            :meth:`~ancf_jax.results.Results.joint_force`), ``"energy"``,
+            :meth:`~ancf_jax.results.Results.joint_force`; ``moment``: the moment a
+            clamp or fixed joint applies to its beam node,
+            :meth:`~ancf_jax.results.Results.joint_moment`), ``"energy"``,
             ``"member"`` (force [N] and engaged state of a spring-damper named ``target``),
             ``"friction"`` (friction force and normal reaction [N] of a sliding
             friction), ``"drive"`` (tangential force [N] of a sliding drive),
@@ -260,6 +262,8 @@ def evaluate(results: Results, outputs: Iterable[Output]) -> dict[str, np.ndarra
                 val = results.sliding_reaction(o.target)[:, 0 if o.component == "normal" else 1]
             elif o.component in ("fx", "fy"):
                 val = results.joint_force(o.target)[:, 0 if o.component == "fx" else 1]
+            elif o.component == "moment":
+                val = results.joint_moment(o.target)
             else:
                 val = results.multipliers(o.target)[:, int(o.component)]
         elif o.kind == "friction":

@@ -24,6 +24,7 @@ from .forces import AbstractOneSidedSpringDamper, SpringDamper
 from .joints import (Clamp, Coincident, FixedJoint, PathCoordinate, PrescribedCoordinate, PrescribedPoint,
                      SlidingJoint)
 from .sliding import AbstractSlidingDrive
+from .points import BeamNode
 from .system import System
 
 
@@ -56,6 +57,24 @@ def _member_history(system: System, force, q, v):
                               jnp.ones(())])
         return jnp.stack([force.tension(system, qq, vv), force.engaged(system, qq).astype(qq.dtype)])
     return jax.vmap(one)(q, v)
+
+
+@eqx.filter_jit
+def _moment_history(system: System, k: int, q, lam, t):
+    """Moment [N·m] a joint applies to the beam node it holds, per row: with f the
+    generalized force −(∂Φ/∂r')ᵀλ of joint k on the node's slope r', the moment of a
+    rotation δr' = δθ ẑ×r' is M = r' × f."""
+    c = system.constraints[k]
+    node = c.node if isinstance(c, Clamp) else c.point
+    o = system.constraint_offset(k)
+
+    def one(qq, ll, tt):
+        idx = node.coordinates(system, qq)[2:4]
+        jac = jax.jacfwd(lambda z: c.residual(system, qq.at[idx].set(z), tt))(qq[idx])
+        f = -jac.T @ ll[o:o + c.size]
+        r1 = qq[idx]
+        return r1[0] * f[1] - r1[1] * f[0]
+    return jax.vmap(one)(q, lam, t)
 
 
 @eqx.filter_jit
@@ -262,6 +281,21 @@ class Results:
                              "use its multipliers (reaction index)")
         lam = self.multipliers(name)[:, :2]
         return lam if isinstance(c, SlidingJoint) else -lam
+
+    def joint_moment(self, name: str) -> np.ndarray:
+        """Moment [N·m] (counter-clockwise positive) that a clamp, or a fixed joint of a
+        beam node to a body, applies to the beam node it holds (the support moment of
+        a clamp), shape (N,): from the joint's generalized force f on the node's slope
+        r', M = r' × f (the virtual work of a rotation δr' = δθ ẑ × r')."""
+        names = [c.name for c in self.system.constraints]
+        k = self._index(tuple(names), name, "joint")
+        c = self.system.constraints[k]
+        holds_node = isinstance(c, Clamp) or (isinstance(c, FixedJoint) and isinstance(c.point, BeamNode))
+        if not holds_node:
+            raise ModelError(f"joint {name!r} ({type(c).__name__}) holds no beam node's slope: no moment "
+                             "output (clamps and fixed joints of beam nodes have one)")
+        return np.asarray(_moment_history(self.system, k, jnp.asarray(self.q), jnp.asarray(self.lam),
+                                          jnp.asarray(self.t)))
 
     def force_element(self, name: str):
         """The force element called ``name`` of the system."""

@@ -185,3 +185,19 @@ def test_bending_moment_of_the_elastica():
         assert c["m0.0"][0] == pytest.approx(2.5 * c["k0"][0], rel=1e-12)
     assert worst[0] < 2e-3 and worst[1] < worst[0] / 2.5, worst
     assert Output("m", "bending", "strip", "moment", s=0.1).unit == "N*m"
+
+
+@pytest.mark.parametrize("mode", ["full", "direction", "exudyn"])
+def test_clamp_moment_of_the_cantilever(mode):
+    """Reaction component "moment" (Results.joint_moment): the clamp of the cantilever
+    under its tip load P = 5 N (static, large deflection) holds it with the support
+    moment M = P x_tip (moment equilibrium of the whole beam, exact for any mesh), for
+    the clamp's three modes; and the support force (0, P)."""
+    sc = load_scenario("cantilever_tip_load", [f'joints.root.mode="{mode}"'] if mode != "full" else [])
+    c = evaluate(sc.static_results(), [Output("m", "reaction", "root", "moment"),
+                                       Output("fy", "reaction", "root", "fy"),
+                                       Output("x", "node", "strip", "x", node=-1)])
+    assert c["x"][0] < 0.9  # large deflection
+    assert c["m"][0] == pytest.approx(5.0 * c["x"][0], rel=1e-9)
+    assert c["fy"][0] == pytest.approx(5.0, rel=1e-9)
+    assert Output("m", "reaction", "root", "moment").unit == "N*m"
