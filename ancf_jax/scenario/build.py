@@ -1,8 +1,9 @@
 """From a checked scenario to the builder: :func:`make_model` and :func:`make_outputs`.
 
 Every name has been resolved by :mod:`~.checks`; here the tables become
-:class:`~ancf_jax.model.Model` calls in file order (beams, bodies, joints, loads), so
-the assembled system lists its constraints in the order of the file.
+:class:`~ancf_jax.model.Model` calls in file order (beams, bodies, moving masses,
+chains, joints, loads), so the assembled system lists its constraints in the order of
+the file.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from ..beam import Beam
 from ..element import laws
 from ..element.strain_energy import Formulation
 from ..errors import ModelError
+from ..functions import ConstantSpeed
 from ..model import Model, beam_point, body_point, ground, node
 from ..outputs import DERIVATIVES, Output
 from ..section import Section
@@ -35,6 +37,13 @@ class PointPath:
 
     def __call__(self, t):
         return jnp.stack([jnp.asarray(self.x(t), float), jnp.asarray(self.y(t), float)])
+
+
+def path_of(item) -> ConstantSpeed:
+    """The :class:`~ancf_jax.functions.ConstantSpeed` path start + speed·t + profile(t)
+    [m] of a moving force, moving mass or chain (start and speed are data: a run is
+    differentiable with respect to them; the profile is a checked time function)."""
+    return ConstantSpeed(item.start, item.speed, item.profile)
 
 
 def local_of(spec: S.ScenarioSpec, ref: S.PointRef) -> tuple[float, float]:
@@ -162,6 +171,19 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
                 m.add_body(name, mass=b.mass, inertia=b.inertia, position=position, angle=b.angle,
                            velocity=b.velocity, angular_velocity=b.angular_velocity, gravity=b.gravity)
 
+    for name, mm in spec.moving_masses.items():
+        with _located(file, ("moving_masses", name)):
+            m.moving_mass(name, mm.beam, mass=mm.mass, path=path_of(mm), along=mm.along, gravity=mm.gravity)
+
+    for name, c in spec.chains.items():
+        with _located(file, ("chains", name)):
+            path = None  # x held at the base's x
+            if c.speed is not None or c.profile is not None:
+                path = ConstantSpeed(c.base[0] if c.start is None else c.start,
+                                     0.0 if c.speed is None else c.speed, c.profile)
+            m.lumped_chain(name, base=c.base, heights=c.heights, masses=c.masses, stiffness=c.stiffness,
+                           damping=c.damping, forces=c.forces, path=path, gravity=c.gravity)
+
     for name, j in spec.joints.items():
         with _located(file, ("joints", name)):
             if j.type == "clamp":
@@ -200,6 +222,12 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
                 m.torque(name, f.body, f.torque, f.time_function)
             elif f.type == "mass_proportional":
                 m.mass_proportional_load(name, f.item, f.acceleration, f.time_function)
+            elif f.type == "moving_force":
+                m.moving_force(name, f.beam, f.force, path=path_of(f), along=f.along,
+                               time_function=f.time_function)
+            elif f.type == "contact":
+                m.contact(name, point_ref(spec, lengths, f.point), f.beam, stiffness=f.stiffness,
+                          damping=f.damping, side=f.side, offset=f.offset)
             else:
                 m.spring_damper(name, point_ref(spec, lengths, f.a), point_ref(spec, lengths, f.b),
                                 stiffness=f.stiffness, damping=f.damping, rest_length=f.rest_length,
@@ -265,8 +293,8 @@ def make_outputs(spec: S.ScenarioSpec) -> list[Output]:
                               o.component if o.component is not None else str(o.index)))
         elif o.type in ("friction", "drive"):
             out.append(Output(name, o.type, f"{o.joint}.{o.type}", o.component))
-        elif o.type == "member":
-            out.append(Output(name, "member", o.load, o.component))
+        elif o.type in ("member", "contact", "load"):
+            out.append(Output(name, o.type, o.load, o.component))
         else:
             out.append(Output(name, "energy", "", o.component))
     return out

@@ -18,7 +18,7 @@ from . import schema as S
 from ..errors import ModelError
 from .errors import Invalid
 from .types import TimeFunctionSpec
-from .geometry import element_count, first_node, reference_length
+from .geometry import element_count, first_node, initial_node_positions, reference_length
 
 NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_-]{0,63}$")
 NAME_RULE = "a name of letters, digits, '_' and '-', starting with a letter or '_', at most 64 characters"
@@ -31,6 +31,28 @@ JOINT_SIZE = {"pin": 2, "revolute": 2, "fixed": 3, "sliding": 2, "prescribed_poi
               "prescribed_body": 1}
 #: joint types whose first two equations are a point's position (force outputs fx, fy)
 POINT_JOINTS = ("pin", "revolute", "clamp", "fixed", "sliding", "prescribed_point")
+#: the groups of named entities (names unique across them)
+GROUPS = ("beams", "bodies", "moving_masses", "chains", "joints", "loads")
+#: output types that read a load of [loads], and the load type each needs
+LOAD_OUTPUTS = {"member": "spring_damper", "contact": "contact", "load": "moving_force"}
+
+
+def host_values(f: TimeFunctionSpec, times) -> np.ndarray:
+    """A time function's values at ``times`` [s] with NumPy (nothing compiled)."""
+    times = np.asarray(times, float)
+    if f.kind == "expression":
+        return f.function.numpy(times)
+    if f.kind == "constant":
+        return np.full(times.shape, f.function.value)
+    return np.interp(times, f.function.times, f.function.values)
+
+
+def path_values(item, times) -> np.ndarray:
+    """p(t) = start + speed·t + profile(t) [m] of a moving force, moving mass or chain
+    at ``times`` (NumPy)."""
+    times = np.asarray(times, float)
+    p = item.start + item.speed * times
+    return p if item.profile is None else p + host_values(item.profile, times)
 
 
 def _names(names) -> str:
@@ -45,6 +67,15 @@ class Checker:
         self.spec = spec
         self.lengths: dict[str, float] = {}
         self.elements: dict[str, int] = {}
+        #: point masses the moving_masses and chains tables make: {body name: what made it}
+        self.made_bodies: dict[str, str] = {}
+        for name in spec.moving_masses:
+            self.made_bodies[name] = f'moving mass "{name}"'
+        for name, c in spec.chains.items():
+            for i in range(len(c.heights)):
+                self.made_bodies[f"{name}.{i + 1}"] = f'chain "{name}"'
+        #: sliding joints of the moving masses: {joint name: moving mass}
+        self.made_sliders = {f"{name}.slider": name for name in spec.moving_masses}
 
     # ------------------------------------------------------------------ helpers
     def beam(self, path, name):
@@ -55,16 +86,26 @@ class Checker:
         known = list(self.spec.bodies)
         if before is not None:
             known = known[: known.index(before)]
+        else:  # the point masses of moving_masses and chains (added after the bodies)
+            known += list(self.made_bodies)
         if name not in known:
             extra = " declared before this one" if before is not None else ""
             if before is not None and name in self.spec.bodies:
                 raise Invalid(path, f'body "{name}" is declared after this body',
                               f"the name of a body declared before: {_names(known)}")
+            if before is not None and name in self.made_bodies:
+                raise Invalid(path, f'body "{name}" is a point mass of {self.made_bodies[name]}, made after '
+                              "the bodies", f"the name of a body declared before: {_names(known)}")
             raise Invalid(path, f'body "{name}" does not exist', f"the name of a body{extra}: {_names(known)}")
 
+    def joint_type(self, name) -> str:
+        """The type of a joint of [joints] or of a moving mass's sliding joint."""
+        return "sliding" if name in self.made_sliders else self.spec.joints[name].type
+
     def joint(self, path, name, types=None):
-        joints = self.spec.joints
-        known = [n for n, j in joints.items() if types is None or j.type in types]
+        joints = {**{n: j.type for n, j in self.spec.joints.items()},
+                  **{n: "sliding" for n in self.made_sliders}}
+        known = [n for n, t in joints.items() if types is None or t in types]
         what = "a joint" if types is None else " or ".join(f"{t} joint" for t in types)
         if name not in known:
             exists = name in joints
@@ -111,7 +152,7 @@ class Checker:
                 self.arc_length(path + ("s",), ref.beam, ref.s)
 
     def body_point(self, path, body, name):
-        points = self.spec.bodies[body].points
+        points = self.spec.bodies[body].points if body in self.spec.bodies else {}
         if name not in points:
             raise Invalid(path, f'body "{body}" has no point "{name}"',
                           f'a name in bodies.{body}.points: {_names(points)}')
@@ -130,13 +171,14 @@ class Checker:
         if self.spec.name is not None and not NAME.match(self.spec.name):
             raise Invalid(("name",), f"invalid scenario name {self.spec.name!r}", NAME_RULE)
         seen: dict[str, str] = {}
-        for group in ("beams", "bodies", "joints", "loads"):
+        for group in GROUPS:
             for name in getattr(self.spec, group):
                 if not NAME.match(name):
                     raise Invalid((group, name), f"invalid name {name!r}", NAME_RULE)
                 if name in seen:
                     raise Invalid((group, name), f'duplicate name "{name}": already used in {seen[name]}',
-                                  "names unique across beams, bodies, joints and loads")
+                                  "names unique across beams, bodies, joints and loads (and "
+                                  "moving_masses, chains)")
                 seen[name] = group
         for body, spec in self.spec.bodies.items():
             for p in spec.points:
@@ -320,6 +362,9 @@ class Checker:
                                       "no key, or force = F")
 
     def rotating(self, path, body, what):
+        if body in self.made_bodies:
+            raise Invalid(path, f'"{body}" is a point mass of {self.made_bodies[body]} (translation only): '
+                          f"{what} needs a rotation", "a rigid body with an inertia")
         if self.spec.bodies[body].point_mass:
             raise Invalid(path, f'"{body}" is a point mass (translation only): {what} needs a rotation',
                           "a rigid body with an inertia")
@@ -349,12 +394,97 @@ class Checker:
                 self.body(path + ("body",), f.body)
                 self.rotating(path + ("body",), f.body, "a torque")
             elif f.type == "mass_proportional":
-                if f.item not in self.spec.beams and f.item not in self.spec.bodies:
+                items = [*self.spec.beams, *self.spec.bodies, *self.made_bodies]
+                if f.item not in items:
                     raise Invalid(path + ("item",), f'"{f.item}" is no beam or body',
-                                  f"the name of a beam or body: {_names({**self.spec.beams, **self.spec.bodies})}")
+                                  f"the name of a beam or body: {_names(items)}")
+            elif f.type == "moving_force":
+                self.beam(path + ("beam",), f.beam)
+                if f.along == "x":
+                    self.monotonic(path + ("along",), f.beam)
+            elif f.type == "contact":
+                self.point(path + ("point",), f.point)
+                self.beam(path + ("beam",), f.beam)
+                if f.point.beam == f.beam:
+                    raise Invalid(path + ("point",), f'a point of beam "{f.beam}" cannot contact that beam',
+                                  "a body point, a ground point or a point of another beam")
             else:
                 self.point(path + ("a",), f.a)
                 self.point(path + ("b",), f.b)
+
+    def monotonic(self, path, beam):
+        """along = "x" needs a beam whose initial x is strictly monotonic along it."""
+        x = self.initial_x(beam)
+        dx = np.diff(x)
+        if not (np.all(dx > 0.0) or np.all(dx < 0.0)):
+            raise Invalid(path, f'along = "x" needs a beam whose x is monotonic along it; the nodes of '
+                          f'beam "{beam}" are at x = {", ".join(f"{v:g}" for v in x[:8])}'
+                          + (", ..." if len(x) > 8 else ""),
+                          '"arc_length", or a beam running left to right or right to left (a track, rope or wire)')
+
+    def initial_x(self, beam) -> np.ndarray:
+        """x [m] of the nodes of a beam's initial shape (a catenary: its ends)."""
+        return initial_node_positions(self.spec.beams[beam], self.elements[beam], self.lengths[beam])[:, 0]
+
+    def moving_masses(self):
+        """Each moving mass on its beam at every output time (along x: inside the x
+        range of the beam's initial shape)."""
+        times = self.output_times()
+        for name, mm in self.spec.moving_masses.items():
+            path = ("moving_masses", name)
+            self.beam(path + ("beam",), mm.beam)
+            self.profile(path, mm, times)
+            p = path_values(mm, times)
+            if mm.along == "arc_length":
+                lo, hi, what = 0.0, self.lengths[mm.beam], "arc length"
+            else:
+                self.monotonic(path + ("along",), mm.beam)
+                x = self.initial_x(mm.beam)
+                lo, hi, what = float(x.min()), float(x.max()), "x"
+            tol = 1e-12 * max(1.0, abs(lo), abs(hi))
+            off = (p < lo - tol) | (p > hi + tol)
+            if np.any(off):
+                i = int(np.argmax(off))
+                key = "start" if i == 0 else ("speed" if mm.profile is None else "profile")
+                raise Invalid(path + (key,), f'the mass is off beam "{mm.beam}" at t = {times[i]:g} s '
+                              f"({what} {p[i]:g} m)", f"a path with {what} in {lo:g} .. {hi:g} [m] at every "
+                              f"output time 0 .. {self.spec.solver.t_end:g} s")
+
+    def chains(self):
+        for name, c in self.spec.chains.items():
+            path = ("chains", name)
+            h = np.asarray(c.heights)
+            n = len(h)
+            if np.any(np.diff(np.concatenate([[0.0], h])) <= 0.0):
+                raise Invalid(path + ("heights",), f"not positive and increasing: {list(c.heights)}",
+                              "an array of heights > 0 [m] above the base, increasing")
+            for key, unit, strict in (("masses", "kg", True), ("stiffness", "N/m", False),
+                                      ("damping", "N·s/m", False), ("forces", "N", None)):
+                values = getattr(c, key)
+                if values is None:
+                    continue
+                if len(values) != n:
+                    raise Invalid(path + (key,), f"{len(values)} value{'s' if len(values) != 1 else ''} for {n} heights",
+                                  f"{n} numbers [{unit}], one per mass")
+                for i, v in enumerate(values):
+                    if strict is not None and (v <= 0.0 if strict else v < 0.0):
+                        raise Invalid(path + (key, i), f"must be {'>' if strict else '>='} 0, got {v:g}",
+                                      f"a number {'>' if strict else '>='} 0 [{unit}]")
+            if c.speed is None and c.profile is None and c.start is not None:
+                raise Invalid(path + ("start",), "start needs speed or profile (without them the masses' x "
+                              "is held at the base's x)", "no key, or start with speed or profile")
+            self.profile(path, c, self.output_times())
+
+    def profile(self, path, item, times):
+        """A path's profile finite at the output times (tables and constants always are)."""
+        if item.profile is not None and item.profile.kind == "expression":
+            values = host_values(item.profile, times)
+            bad = ~np.isfinite(values)
+            if np.any(bad):
+                i = int(np.argmax(bad))
+                raise Invalid(path + ("profile",), f"{item.profile.text!r} is not finite at t = {times[i]:g} s "
+                              f"(value {values[i]})", "a time function finite at every output time "
+                              f"0 .. {self.spec.solver.t_end:g} s [m]")
 
     def solver(self):
         sol = self.spec.solver
@@ -381,7 +511,7 @@ class Checker:
         """Every expression finite at the output times and at statics.time."""
         times = np.append(self.output_times(), self.spec.statics.time)
         sol = self.spec.solver
-        for group in ("joints", "loads"):
+        for group in ("moving_masses", "chains", "joints", "loads"):
             for name, item in getattr(self.spec, group).items():
                 nested = getattr(item, "drive", None)
                 fields = [(key, getattr(item, key)) for key in type(item).model_fields]
@@ -433,30 +563,31 @@ class Checker:
             elif o.type == "reaction":
                 self.joint(path + ("joint",), o.joint)
                 self.exclusive(path, o, ("component", "index"), required=True)
-                j = self.spec.joints[o.joint]
-                if o.component in ("normal", "tangential") and j.type != "sliding":
+                kind = self.joint_type(o.joint)
+                if o.component in ("normal", "tangential") and kind != "sliding":
                     raise Invalid(path + ("component",), f'normal and tangential need a sliding joint, '
-                                  f'"{o.joint}" is a {j.type} joint', "fx, fy, or index = 0 .. equations − 1")
-                if o.component in ("fx", "fy") and j.type not in POINT_JOINTS:
+                                  f'"{o.joint}" is a {kind} joint', "fx, fy, or index = 0 .. equations − 1")
+                if o.component in ("fx", "fy") and kind not in POINT_JOINTS:
                     raise Invalid(path + ("component",), f'fx and fy need a joint that holds a point, '
-                                  f'"{o.joint}" is a {j.type} joint', "index = 0 .. equations − 1")
-                size = (4 if j.mode == "full" else 3) if j.type == "clamp" else JOINT_SIZE[j.type]
+                                  f'"{o.joint}" is a {kind} joint', "index = 0 .. equations − 1")
+                j = self.spec.joints.get(o.joint)
+                size = (4 if j.mode == "full" else 3) if kind == "clamp" else JOINT_SIZE[kind]
                 if o.index is not None and o.index >= size:
                     raise Invalid(path + ("index",), f'joint "{o.joint}" has {size} equations',
                                   f"an integer 0 .. {size - 1}")
 
             elif o.type in ("friction", "drive"):
                 self.joint(path + ("joint",), o.joint, ("sliding",))
-                if getattr(self.spec.joints[o.joint], o.type) is None:
+                if o.joint in self.made_sliders or getattr(self.spec.joints[o.joint], o.type) is None:
                     raise Invalid(path + ("joint",), f'sliding joint "{o.joint}" has no {o.type}',
                                   f"a sliding joint with a {o.type} table")
-            elif o.type == "member":
+            elif o.type in LOAD_OUTPUTS:
+                kind = LOAD_OUTPUTS[o.type]
                 f = self.spec.loads.get(o.load)
-                if f is None or f.type != "spring_damper":
-                    known = ", ".join(f'"{n}"' for n, l in self.spec.loads.items()
-                                      if l.type == "spring_damper") or "none"
-                    raise Invalid(path + ("load",), f'"{o.load}" is not a spring_damper of [loads]',
-                                  f"one of: {known}")
+                if f is None or f.type != kind:
+                    known = ", ".join(f'"{n}"' for n, l in self.spec.loads.items() if l.type == kind) or "none"
+                    raise Invalid(path + ("load",), f'"{o.load}" is not a {kind} of [loads]',
+                                  f"the name of a {kind} load: {known}")
 
     def fatigue(self):
         f = self.spec.fatigue
@@ -480,6 +611,8 @@ class Checker:
         self.names()
         self.beams()
         self.bodies()
+        self.moving_masses()
+        self.chains()
         self.joints()
         self.loads()
         self.solver()

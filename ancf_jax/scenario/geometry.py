@@ -91,3 +91,21 @@ def first_node(beam: BeamSpec) -> tuple[float, float]:
         return (g.center[0] + g.radius * math.cos(g.start_angle),
                 g.center[1] + g.radius * math.sin(g.start_angle))
     return g.points[0]
+
+
+def initial_node_positions(beam: BeamSpec, n_elements: int, length: float) -> np.ndarray:
+    """Node positions [m] of the beam's initial shape, shape (k, 2), host only: every
+    node of the reference geometry or of given nodes; for a catenary only its two ends
+    (its x is monotonic between them)."""
+    ini, g = beam.initial, beam.geometry
+    if ini.shape == "nodes" and ini.nodes is not None:
+        return np.asarray(ini.nodes, float)[:, :2]
+    if ini.shape == "catenary" and ini.end is not None:
+        start = ini.start if ini.start is not None else first_node(beam)
+        return np.array([start, ini.end], float)
+    if isinstance(g, Straight):
+        d = np.asarray(g.direction, float) / np.linalg.norm(g.direction)
+        return np.asarray(g.start, float) + np.linspace(0.0, length, n_elements + 1)[:, None] * d
+    if isinstance(g, Arc):
+        return arc_nodes(g, n_elements)[0]
+    return np.asarray(g.points, float)

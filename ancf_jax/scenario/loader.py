@@ -161,7 +161,7 @@ def _schema_error(file: str, err: dict) -> ScenarioError:
         return ScenarioError(file, path, f"must be {bounds[kind]} {limit:g}, got {got}", text)
     if kind == "finite_number":
         return ScenarioError(file, path, f"must be finite, got {got}", text)
-    if kind in ("vector", "matrix", "expression", "time_function", "quadrature"):
+    if kind in ("vector", "matrix", "numbers", "side", "expression", "time_function", "quadrature"):
         return ScenarioError(file, path, err["msg"], text)
     if kind == "literal_error":
         return ScenarioError(file, path, f"got {got}", text)

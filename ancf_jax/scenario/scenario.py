@@ -195,6 +195,8 @@ class Scenario:
         bodies = [f"{n} ({b.mass:g} kg)" for n, b in sp.bodies.items()]
         joints = [f"{n} ({j.type})" for n, j in sp.joints.items()]
         loads = [f"{n} ({f.type})" for n, f in sp.loads.items()]
+        moving = [f"{n} ({m.mass:g} kg on {m.beam})" for n, m in sp.moving_masses.items()]
+        chains = [f"{n} ({plural(len(c.heights), 'mass', 'masses')})" for n, c in sp.chains.items()]
         s = self.solver
         sliders = any(j.type == "sliding" for j in sp.joints.values())
         parts = [f"{self.path}: valid scenario '{self.name}'"
@@ -203,6 +205,8 @@ class Scenario:
                  f"{plural(len(bodies), 'body', 'bodies')}{': ' + ', '.join(bodies) if bodies else ''};",
                  f"{plural(len(joints), 'joint')}{': ' + ', '.join(joints) if joints else ''};",
                  f"{plural(len(loads), 'load')}{': ' + ', '.join(loads) if loads else ''};",
+                 *([f"{plural(len(moving), 'moving mass', 'moving masses')}: {', '.join(moving)};"] if moving else []),
+                 *([f"{plural(len(chains), 'chain')}: {', '.join(chains)};"] if chains else []),
                  f"gravity ({sp.gravity[0]:g}, {sp.gravity[1]:g}) m/s².",
                  "Initial state: " + ("as given" if self.initial_mode == "given" else
                                       "static equilibrium under the loads at t = 0"

@@ -28,7 +28,7 @@ from ..integrators.generalized_alpha import GeneralizedAlpha
 from ..integrators.explicit import RK4
 from ..newton import ModifiedNewton
 from ..simulation import SOLVERS
-from .types import Nodes4, Points2, Quadrature, TimeFunction, Vec2
+from .types import Nodes4, Numbers, Points2, Quadrature, Side, TimeFunction, Vec2
 
 #: current version of the file format
 FORMAT_VERSION = 1
@@ -401,8 +401,90 @@ class MassProportionalSpec(Table):
     time_function: Optional[TimeFunction] = key(None, doc="scale f(t) (default 1)")
 
 
-Load = Annotated[Union[PointForceSpec, TorqueSpec, SpringDamperSpec, MassProportionalSpec],
+PROFILE_DOC = "a deviation [m] added to start + speed·t (default none)"
+
+
+class MovingForceSpec(Table):
+    """A force of fixed direction F·f(t) that moves along a beam: it acts at the material
+    point under the position p(t) = start + speed·t (+ profile(t)) [m], the horizontal
+    coordinate x of the loaded point (along = "x": a vehicle at x = x₀ + v t) or its
+    reference arc length (along = "arc_length"); zero while that point is off the beam (a
+    load entering at one end and leaving at the other). With along = "x" the beam's x must
+    be monotonic along it (a track, rope or wire)."""
+
+    type: Literal["moving_force"] = key(doc="load type")
+    beam: str = key(doc="beam name")
+    force: Vec2 = key(unit="N", doc="force vector F")
+    along: Literal["x", "arc_length"] = key("x", doc="x: p is the loaded point's horizontal coordinate; "
+                                                     "arc_length: its reference arc length")
+    start: float = key(unit="m", allow_inf_nan=False, doc="p(0)")
+    speed: float = key(unit="m/s", allow_inf_nan=False, doc="v, dp/dt without the profile")
+    profile: Optional[TimeFunction] = key(None, unit="m", doc=PROFILE_DOC)
+    time_function: Optional[TimeFunction] = key(None, doc="scale f(t) (default 1)")
+
+
+class ContactSpec(Table):
+    """Unilateral penalty contact between a point and a beam at the beam's closest point:
+    normal force k δ + max(c δ̇, −k δ) while the penetration δ > 0, else 0 (it never pulls);
+    gap g = side·n̂·(p − r(s*)) − offset, n̂ the beam's left normal. No contact while the
+    closest point is beyond an end of the beam."""
+
+    type: Literal["contact"] = key(doc="load type")
+    point: PointRef = key(doc="the contacting point (e.g. the head of a chain: { body = \"pan.2\" })")
+    beam: str = key(doc="beam name")
+    stiffness: float = key(unit="N/m", gt=0.0, allow_inf_nan=False, doc="penalty stiffness k")
+    damping: float = key(0.0, unit="N·s/m", ge=0.0, allow_inf_nan=False, doc="c")
+    side: Side = key(1, doc="the side of the beam the point is on: 1 on the side of the left normal "
+                            "(above a beam running in +x), -1 the other (below: a pantograph under a wire)")
+    offset: float = key(0.0, unit="m", ge=0.0, allow_inf_nan=False,
+                        doc="g₀, the gap at which contact begins (radii)")
+
+
+Load = Annotated[Union[PointForceSpec, TorqueSpec, SpringDamperSpec, MassProportionalSpec, MovingForceSpec,
+                       ContactSpec],
                  Field(discriminator="type")]
+
+
+# ----------------------------------------------------------------------------- moving masses, chains
+class MovingMassSpec(Table):
+    """A point mass (a body named NAME, translation only) moving along a beam at a
+    prescribed position p(t) = start + speed·t (+ profile(t)) [m]: the horizontal
+    coordinate x of the mass (along = "x") or its reference arc length
+    (along = "arc_length"). It rides on the sliding joint NAME.slider (which carries its
+    inertia, with the convective terms of the moving point) driven by the constraint
+    NAME.drive. The path must keep the mass on the beam for the whole run."""
+
+    beam: str = key(doc="beam name")
+    mass: float = key(unit="kg", gt=0.0, allow_inf_nan=False, doc="m")
+    along: Literal["x", "arc_length"] = key("x", doc="x: p is the mass's horizontal coordinate; "
+                                                     "arc_length: its reference arc length on the beam")
+    start: float = key(unit="m", allow_inf_nan=False, doc="p(0): where the mass starts")
+    speed: float = key(unit="m/s", allow_inf_nan=False, doc="v, dp/dt without the profile")
+    profile: Optional[TimeFunction] = key(None, unit="m", doc=PROFILE_DOC)
+    gravity: bool = key(True, doc="whether gravity acts on the mass")
+
+
+class ChainSpec(Table):
+    """A vertical chain of point masses joined by spring-dampers: a current collector
+    (pantograph) or a suspension. The i-th mass (a point-mass body named NAME.i, i = 1 at
+    the bottom) starts at the i-th height above the base; stage i (NAME.stage<i>, a
+    spring-damper along +y, unstressed as built) joins mass i to mass i − 1 (stage 1: to
+    the base point); the i-th force acts on mass i along +y (e.g. the static uplift). The
+    masses move vertically; their x is held at the base's x, or follows
+    start + speed·t (+ profile(t)) when speed or profile is given (a vehicle)."""
+
+    base: Vec2 = key(unit="m", doc="the base point (x, y)")
+    heights: Numbers = key(unit="m", doc="y of each mass above the base, positive and increasing")
+    masses: Numbers = key(unit="kg", doc="m_i > 0, one per height")
+    stiffness: Numbers = key(unit="N/m", doc="k_i >= 0 of each stage, one per height")
+    damping: Optional[Numbers] = key(None, unit="N·s/m", doc="c_i >= 0 of each stage (default 0)")
+    forces: Optional[Numbers] = key(None, unit="N", doc="constant force along +y on each mass (default 0)")
+    start: Optional[float] = key(None, unit="m", allow_inf_nan=False,
+                                 doc="with speed or profile: x of the masses at t = 0 (default the base's x)")
+    speed: Optional[float] = key(None, unit="m/s", allow_inf_nan=False,
+                                 doc="horizontal speed v of the masses (default: x held at the base's x)")
+    profile: Optional[TimeFunction] = key(None, unit="m", doc=PROFILE_DOC)
+    gravity: bool = key(True, doc="whether gravity acts on the masses")
 
 
 # ----------------------------------------------------------------------------- state, solvers
@@ -646,10 +728,29 @@ class DriveOutput(Table):
     component: Literal[COMPONENTS["drive"]] = key("force", unit="N", doc="the force")
 
 
+class ContactOutput(Table):
+    """The normal force of a contact (>= 0), its gap g (negative: penetration), its
+    engaged state (1: closed) or the arc length s* of the closest point on the beam."""
+
+    type: Literal["contact"] = key(doc="output type")
+    load: str = key(doc="contact name (in [loads])")
+    component: Literal[COMPONENTS["contact"]] = key("force", unit="N, m, -, m", doc="force, gap, state or arc length")
+
+
+class LoadOutput(Table):
+    """Where a moving force is: the position y or x of the beam point under it (y: the
+    deflection under the load), its reference arc length s, or whether it is on the beam
+    (1) or off it (0)."""
+
+    type: Literal["load"] = key(doc="output type")
+    load: str = key(doc="moving force name (in [loads])")
+    component: Literal[COMPONENTS["load"]] = key("y", unit="m, m, m, -", doc="coordinate, arc length or state")
+
+
 Output = Annotated[Union[NodeOutput, PointOutput, BodyOutput, SlidingOutput, SlidingPointOutput,
                          StressOutput, AxialOutput, BendingOutput, ReactionOutput, EnergyOutput, MemberOutput,
                          FrictionOutput,
-                         DriveOutput],
+                         DriveOutput, ContactOutput, LoadOutput],
                    Field(discriminator="type")]
 
 
@@ -736,6 +837,10 @@ class ScenarioSpec(Table):
     gravity: Vec2 = key((0.0, -9.81), unit="m/s²", doc="gravitational acceleration")
     beams: dict[str, BeamSpec] = key({}, doc="beams by name")
     bodies: dict[str, BodySpec] = key({}, doc="rigid bodies by name")
+    moving_masses: dict[str, MovingMassSpec] = key({}, doc="point masses moving along beams at prescribed "
+                                                         "positions, by name")
+    chains: dict[str, ChainSpec] = key({}, doc="vertical chains of point masses and spring-dampers "
+                                               "(pantographs), by name")
     joints: dict[str, Joint] = key({}, doc="joints by name")
     loads: dict[str, Load] = key({}, doc="applied loads and force elements by name")
     initial: InitialSpec = key(InitialSpec(), doc="initial state")

@@ -69,6 +69,33 @@ Nodes4 = Annotated[tuple[tuple[float, float, float, float], ...],
                    Accepts("an array of [r_x, r_y, r_x', r_y'] rows, one per node")]
 
 
+#: most values of a :data:`Numbers` array (e.g. masses of a lumped chain)
+MAX_NUMBERS = 100
+
+
+def _numbers(value):
+    if (not isinstance(value, (list, tuple)) or len(value) < 1 or len(value) > MAX_NUMBERS
+            or not all(map(_is_number, value))):
+        raise _error("numbers", f"must be an array of 1 to {MAX_NUMBERS} numbers, got {value!r}")
+    if not all(math.isfinite(x) for x in value):
+        raise _error("numbers", f"must be finite, got {value!r}")
+    return tuple(float(x) for x in value)
+
+Numbers = Annotated[tuple[float, ...], PlainValidator(_numbers),
+                    Accepts(f"an array of 1 to {MAX_NUMBERS} finite numbers", "an array of numbers")]
+
+
+def _side(value):
+    if not _is_number(value) or not isinstance(value, int) or value not in (1, -1):
+        raise _error("side", f"must be the integer 1 or -1, got {value!r}")
+    return int(value)
+
+
+Side = Annotated[int, PlainValidator(_side),
+                 Accepts("1 (the point on the side of the beam's left normal: above a beam running "
+                         "in +x) or -1 (the other side: below it)", "1 or -1")]
+
+
 @dataclasses.dataclass(frozen=True)
 class TimeFunctionSpec:
     """A checked time function: an :class:`~.expressions.Expression`, a constant or a
