@@ -320,8 +320,8 @@ def _check_out(path, option: str = "--out", *, file: bool = False) -> Path:
 
 def _check_size(args, scs, settings):
     """Refuse a runaway run (steps, output size) before anything is built or compiled;
-    the state size is counted from the scenario (4 per node, 3 per body, 1 per sliding
-    joint)."""
+    the state size is counted from the scenario (4 per node, 3 per body, point mass of
+    a moving mass or chain, 1 per sliding joint, a moving mass's included)."""
     from .errors import ModelError
     from .simulation import FIXED_STEP_SOLVERS, check_run_size
     names = dict(t_end="--t-end" if getattr(args, "t_end", None) is not None else "solver.t_end",
@@ -329,8 +329,10 @@ def _check_size(args, scs, settings):
                  output_dt=("--output-dt" if getattr(args, "output_dt", None) is not None else "outputs.dt"),
                  max_steps="--max-steps", max_output_bytes="")
     for sc in scs.values():
-        n = (sum(4 * (k + 1) for k in sc.beam_elements.values()) + 3 * len(sc.spec.bodies)
-             + sum(j.type == "sliding" for j in sc.spec.joints.values()))
+        bodies = (len(sc.spec.bodies) + len(sc.spec.moving_masses)
+                  + sum(len(c.heights) for c in sc.spec.chains.values()))
+        n = (sum(4 * (k + 1) for k in sc.beam_elements.values()) + 3 * bodies
+             + sum(j.type == "sliding" for j in sc.spec.joints.values()) + len(sc.spec.moving_masses))
         try:
             check_run_size(settings.t_end, settings.dt, settings.output_dt, n, batch=len(scs),
                            fixed_step=settings.solver in FIXED_STEP_SOLVERS,
