@@ -685,14 +685,16 @@ class StressOutput(Table):
 
 class ReactionOutput(Table):
     """A joint reaction: a Lagrange multiplier component (index), the normal or
-    tangential reaction of a sliding joint on its body [N], or the force a joint applies
+    tangential reaction of a sliding joint on its body [N], the force a joint applies
     in global x, y [N] (fx, fy: a pin or clamp on the point it holds, a sliding joint
-    on its body, a revolute or fixed joint on its first point)."""
+    on its body, a revolute or fixed joint on its first point), or the moment [N·m] a
+    clamp or a beam node's fixed joint applies to the node (moment)."""
 
     type: Literal["reaction"] = key(doc="output type")
     joint: str = key(doc="joint name")
-    component: Optional[Literal["normal", "tangential", "fx", "fy"]] = key(
-        None, unit="N", doc="normal, tangential (sliding joints), fx, fy (joints that hold a point)")
+    component: Optional[Literal["normal", "tangential", "fx", "fy", "moment"]] = key(
+        None, unit="N or N*m", doc="normal, tangential (sliding joints), fx, fy (joints that hold a point), "
+        "moment (clamps, fixed joints of beam nodes)")
     index: Optional[int] = key(None, ge=0, le=3, doc="multiplier index (0 .. equations − 1)")
 
 
