@@ -340,7 +340,9 @@ class Results:
     def drive_force(self, name: str) -> np.ndarray:
         """Tangential force [N] of a sliding drive named ``name`` on the body along +s
         (:meth:`~ancf_jax.model.Model.slider_drive`: for a prescribed arc length the
-        reaction −λ_d/|r'(s)| of its constraint), shape (N,)."""
+        reaction −λ_d/|r'(s)| of its constraint), shape (N,). For a moving mass driven
+        along x (:meth:`~ancf_jax.model.Model.moving_mass`, drive ``"NAME.drive"``): the
+        horizontal force [N] on the mass, −λ of its constraint."""
         drives = {f.name: f for f in self.system.forces if isinstance(f, AbstractSlidingDrive)}
         if name in drives:
             return np.asarray(_drive_history(self.system, drives[name], jnp.asarray(self.q),
@@ -348,6 +350,12 @@ class Results:
         joint = next((c for c in self.system.constraints if c.name == name
                       and isinstance(c, (PrescribedCoordinate, PathCoordinate))
                       and c.index >= self.system.sliding_offset), None)
+        if joint is None and name.endswith(".drive") and name[:-len(".drive")] in self.system.body_names:
+            # a moving mass driven along x (Model.moving_mass): the horizontal force on it
+            body = self.system.constraints[self._index(tuple(c.name for c in self.system.constraints), name,
+                                                       "joint")]
+            if isinstance(body, (PrescribedCoordinate, PathCoordinate)):
+                return -self.multipliers(name)[:, 0]
         if joint is None:
             known = list(drives) + [c.name for c in self.system.constraints
                                     if isinstance(c, (PrescribedCoordinate, PathCoordinate))

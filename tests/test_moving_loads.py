@@ -338,7 +338,8 @@ def test_moving_mass_on_an_incline():
     # forces on the cart at constant velocity: the track's N n̂ (normal to it: no
     # friction) and the drive's H x̂ balance the weight: N = m g / cos β, H = −m g tan β
     track_force = res.joint_force("cart.slider")
-    drive = -res.multipliers("cart.drive")[:, 0]
+    drive = res.drive_force("cart.drive")
+    np.testing.assert_array_equal(drive, -res.multipliers("cart.drive")[:, 0])
     normal = np.array([np.sin(beta), np.cos(beta)])
     np.testing.assert_allclose(track_force, np.outer(np.full(len(res.t), mass * g / np.cos(beta)), normal),
                                rtol=1e-8)
