@@ -344,3 +344,25 @@ def test_moving_mass_on_an_incline():
     np.testing.assert_allclose(track_force, np.outer(np.full(len(res.t), mass * g / np.cos(beta)), normal),
                                rtol=1e-8)
     np.testing.assert_allclose(drive, -mass * g * np.tan(beta), rtol=1e-8)
+
+
+def test_speed_is_a_parameter_by_name_and_scenario_key():
+    """``speed.NAME`` (scenario keys loads.NAME.speed, moving_masses.NAME.speed,
+    chains.NAME.speed) reads and sets the data of the path(s) that move an item, for
+    fits and local sensitivities (derivatives through the paths:
+    test_gradients_of_contact_force_statistics)."""
+    from ancf_jax.errors import ModelError
+    from ancf_jax.identification.parameters import from_scenario_key, resolve
+
+    assert from_scenario_key("chains.collector.speed") == "speed.collector"
+    assert from_scenario_key("loads.P.speed") == "speed.P"
+    system, _ = pantograph_model()
+    (p,) = resolve(system, ["chains.collector.speed"])
+    assert p.unit == "m/s" and float(p.get(system)) == 1.0
+    moved = p.set(system, 2.5)
+    assert float(next(c for c in moved.constraints if c.name == "collector.1.x").path.speed) == 2.5
+    string, _ = string_model(4, 3.0, 1e-6)
+    (q,) = resolve(string, ["speed.P"])
+    assert float(q.set(string, 4.0).forces[0].location.path.speed) == 4.0
+    with pytest.raises(ModelError, match="no moving force, moving mass or chain named 'nothing'"):
+        resolve(string, ["speed.nothing"])

@@ -7,12 +7,13 @@ A parameter is named ``KIND`` or ``KIND.TARGET``:
 ``beta``        Rayleigh stiffness-proportional coefficient β       s
 ``E``           Young's modulus of a beam                            Pa
 ``tip_mass``    mass of a rigid body (``mass.BODY`` for any body)    kg
+``speed.NAME``  speed of a moving load, moving mass or chain         m/s
 ==============  ===============================================  ======
 
 Without ``.TARGET``, a beam parameter needs a system with exactly one beam; ``tip_mass``
 means the body named ``tip``, else the only body. The dotted scenario keys of the same
 quantities name them too (:data:`SCENARIO_KEYS`: ``beams.beam.alpha``,
-``beams.beam.section.E``, ``bodies.tip.mass``); any other key (an element count, a
+``beams.beam.section.E``, ``bodies.tip.mass``, ``chains.NAME.speed``); any other key (an element count, a
 length: they change the model's shapes or its construction) is refused. Parameters are changed on a built
 :class:`~ancf_jax.system.System` with ``equinox.tree_at``, so they can be traced
 (differentiated, batched) without rebuilding or recompiling anything.
@@ -34,6 +35,7 @@ KINDS = {
     "beta": ("s", "Rayleigh stiffness-proportional damping coefficient"),
     "E": ("Pa", "Young's modulus"),
     "mass": ("kg", "rigid-body mass"),
+    "speed": ("m/s", "speed of a moving force, moving mass or chain (its ConstantSpeed path)"),
 }
 _ALIASES = {"youngs_modulus": "E", "tip_mass": "mass"}
 
@@ -44,8 +46,9 @@ class Parameter:
 
     Attributes:
         name: as the user wrote it (``alpha``, ``beta.cable``, ``tip_mass``, ...).
-        kind: ``alpha``, ``beta``, ``E`` or ``mass``.
-        target: beam or body name; index: its index in the system.
+        kind: ``alpha``, ``beta``, ``E``, ``mass`` or ``speed``.
+        target: beam or body name, or (``speed``) the name of a moving force, moving
+            mass or chain; index: its index in the system (``speed``: unused).
     """
 
     name: str
@@ -59,6 +62,8 @@ class Parameter:
 
     def get(self, system: System):
         """Current value (a JAX scalar)."""
+        if self.kind == "speed":
+            return _paths(system, self.target)[0].speed
         if self.kind == "alpha":
             return system.beams[self.index].alpha
         if self.kind == "beta":
@@ -71,6 +76,9 @@ class Parameter:
         """A copy of ``system`` with this parameter set to ``value`` (traceable)."""
         k = self.index
         value = jnp.asarray(value, float)
+        if self.kind == "speed":
+            n = len(_paths(system, self.target))
+            return eqx.tree_at(lambda s: tuple(p.speed for p in _paths(s, self.target)), system, (value,) * n)
         if self.kind == "alpha":
             return eqx.tree_at(lambda s: s.beams[k].alpha, system, value)
         if self.kind == "beta":
@@ -80,6 +88,23 @@ class Parameter:
         if self.kind == "E":
             return eqx.tree_at(lambda s: s.beams[k].section.youngs_modulus, system, value)
         return eqx.tree_at(lambda s: s.bodies.mass, system, system.bodies.mass.at[k].set(value))
+
+
+def _paths(system: System, name: str) -> tuple:
+    """The ConstantSpeed paths that move the moving force, moving mass or chain
+    ``name`` (a moving mass's ``NAME.drive``, a chain's ``NAME.i.x``), in system order."""
+    from ..contact import MovingForce
+    from ..functions import ConstantSpeed
+    from ..joints import PathCoordinate
+
+    found = [f.location.path for f in system.forces if isinstance(f, MovingForce) and f.name == name]
+    found += [c.path for c in system.constraints if isinstance(c, PathCoordinate)
+              and (c.name == f"{name}.drive" or (c.name.startswith(f"{name}.") and c.name.endswith(".x")))]
+    found = [p for p in found if isinstance(p, ConstantSpeed)]
+    if not found:
+        raise ModelError(f"parameter speed.{name}: no moving force, moving mass or chain named {name!r} "
+                         "with a constant-speed path")
+    return tuple(found)
 
 
 def resolve(system: System, names) -> tuple[Parameter, ...]:
@@ -94,12 +119,16 @@ def resolve(system: System, names) -> tuple[Parameter, ...]:
     for raw in names:
         name = str(raw).strip()
         # a dotted scenario key (beams.beam.alpha, bodies.tip.mass): its parameter
-        kind, _, target = (from_scenario_key(name) if name.startswith(("beams.", "bodies.")) else name).partition(".")
+        scenario_key = name.startswith(("beams.", "bodies.", "loads.", "moving_masses.", "chains."))
+        kind, _, target = (from_scenario_key(name) if scenario_key else name).partition(".")
         kind = _ALIASES.get(kind, kind)
         if kind not in KINDS:
             raise ModelError(f"unknown parameter {name!r}; known: alpha, beta, E, tip_mass "
-                             "(optionally .BEAM or .BODY, e.g. alpha.beam, mass.tip)")
-        if kind == "mass":
+                             "(optionally .BEAM or .BODY, e.g. alpha.beam, mass.tip), speed.NAME")
+        if kind == "speed":
+            _paths(system, target)  # it exists
+            p = Parameter(name, kind, target, -1)
+        elif kind == "mass":
             bodies = list(system.body_names)
             if not target:
                 target = "tip" if "tip" in bodies else (bodies[0] if len(bodies) == 1 else "")
@@ -130,7 +159,8 @@ def resolve(system: System, names) -> tuple[Parameter, ...]:
 
 
 #: the dotted scenario keys of the parameters (NAME: a beam or body of the file)
-SCENARIO_KEYS = ("beams.NAME.alpha", "beams.NAME.beta", "beams.NAME.section.E", "bodies.NAME.mass")
+SCENARIO_KEYS = ("beams.NAME.alpha", "beams.NAME.beta", "beams.NAME.section.E", "bodies.NAME.mass",
+                 "loads.NAME.speed", "moving_masses.NAME.speed", "chains.NAME.speed")
 
 
 def from_scenario_key(key: str) -> str:
@@ -145,5 +175,7 @@ def from_scenario_key(key: str) -> str:
         return f"E.{parts[1]}"
     if len(parts) == 3 and parts[0] == "bodies" and parts[2] == "mass":
         return f"mass.{parts[1]}"
+    if len(parts) == 3 and parts[0] in ("loads", "moving_masses", "chains") and parts[2] == "speed":
+        return f"speed.{parts[1]}"
     raise ModelError(f"{key}: no derivative with respect to this key; differentiable keys: "
                      f"{', '.join(SCENARIO_KEYS)}")
