@@ -251,8 +251,39 @@ class PointTorque(AbstractLoad):
         return jnp.array([system.body_offset(self.body) + 2])
 
 
-class SpringDamper(AbstractForce):
-    """Linear spring-damper between two points: tension k (ℓ − ℓ₀) + c ℓ̇ [N].
+class AbstractLinearSpringDamper(AbstractForce):
+    """A linear spring-damper on a stage length ℓ(q) between two points: tension
+    k (ℓ − ℓ₀) + c ℓ̇ [N]; potential ½ k (ℓ − ℓ₀)², damping −c ℓ̇ ∂ℓ/∂q. Subclasses say
+    what ℓ is (:meth:`length`)."""
+
+    a: eqx.AbstractVar[AbstractPoint]
+    b: eqx.AbstractVar[AbstractPoint]
+    stiffness: eqx.AbstractVar[jnp.ndarray]
+    damping: eqx.AbstractVar[jnp.ndarray]
+    rest_length: eqx.AbstractVar[jnp.ndarray]
+
+    @abc.abstractmethod
+    def length(self, system, q):
+        """The stage length ℓ(q) [m]."""
+
+    def potential(self, system, q, t):
+        return 0.5 * self.stiffness * (self.length(system, q) - self.rest_length) ** 2
+
+    def applied_force(self, system, q, v, t):
+        return jnp.zeros_like(q)
+
+    def dissipative_force(self, system, q, v):
+        ell_dot = jax.jvp(lambda qq: self.length(system, qq), (q,), (v,))[1]
+        _, vjp = jax.vjp(lambda qq: self.length(system, qq), q)
+        return vjp(-self.damping * ell_dot)[0]
+
+    def coordinates(self, system, q, t):
+        return jnp.concatenate([self.a.coordinates(system, q), self.b.coordinates(system, q)])
+
+
+class SpringDamper(AbstractLinearSpringDamper):
+    """Linear spring-damper between two points: tension k (ℓ − ℓ₀) + c ℓ̇ [N], ℓ the
+    distance between the points.
 
     Attributes:
         stiffness: k [N/m].
@@ -271,22 +302,8 @@ class SpringDamper(AbstractForce):
         d = self.a.position(system, q) - self.b.position(system, q)
         return jnp.sqrt(jnp.dot(d, d))
 
-    def potential(self, system, q, t):
-        return 0.5 * self.stiffness * (self.length(system, q) - self.rest_length) ** 2
 
-    def applied_force(self, system, q, v, t):
-        return jnp.zeros_like(q)
-
-    def dissipative_force(self, system, q, v):
-        ell_dot = jax.jvp(lambda qq: self.length(system, qq), (q,), (v,))[1]
-        _, vjp = jax.vjp(lambda qq: self.length(system, qq), q)
-        return vjp(-self.damping * ell_dot)[0]
-
-    def coordinates(self, system, q, t):
-        return jnp.concatenate([self.a.coordinates(system, q), self.b.coordinates(system, q)])
-
-
-class DirectedSpringDamper(AbstractForce):
+class DirectedSpringDamper(AbstractLinearSpringDamper):
     """Linear spring-damper between two points along a fixed unit direction e (a
     suspension of a lumped-mass chain, e.g. a pantograph's vertical stages): with the
     stage length ℓ = e·(r_b − r_a), tension k (ℓ − ℓ₀) + c ℓ̇ [N] (pulling b towards a
@@ -300,28 +317,14 @@ class DirectedSpringDamper(AbstractForce):
 
     a: AbstractPoint
     b: AbstractPoint
-    direction: jnp.ndarray
     stiffness: jnp.ndarray
     damping: jnp.ndarray
     rest_length: jnp.ndarray
+    direction: jnp.ndarray
 
     def length(self, system, q):
         """ℓ = e·(r_b − r_a) [m]."""
         return jnp.dot(self.direction, self.b.position(system, q) - self.a.position(system, q))
-
-    def potential(self, system, q, t):
-        return 0.5 * self.stiffness * (self.length(system, q) - self.rest_length) ** 2
-
-    def applied_force(self, system, q, v, t):
-        return jnp.zeros_like(q)
-
-    def dissipative_force(self, system, q, v):
-        ell_dot = jax.jvp(lambda qq: self.length(system, qq), (q,), (v,))[1]
-        _, vjp = jax.vjp(lambda qq: self.length(system, qq), q)
-        return vjp(-self.damping * ell_dot)[0]
-
-    def coordinates(self, system, q, t):
-        return jnp.concatenate([self.a.coordinates(system, q), self.b.coordinates(system, q)])
 
 
 class AbstractKinkedForce(AbstractForce):

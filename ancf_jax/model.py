@@ -1000,11 +1000,11 @@ class Model:
                                                 jnp.asarray(a["stiffness"], float),
                                                 jnp.asarray(a["damping"], float), jnp.asarray(a["offset"], float)))
             elif kind == "directed_spring":
-                forces.append(DirectedSpringDamper(name, resolve(a["a"], what), resolve(a["b"], what),
-                                                   jnp.asarray(a["direction"], float),
-                                                   jnp.asarray(a["stiffness"], float),
-                                                   jnp.asarray(a["damping"], float),
-                                                   jnp.asarray(a["rest_length"], float)))
+                forces.append(DirectedSpringDamper(
+                    name, resolve(a["a"], what), resolve(a["b"], what),
+                    stiffness=jnp.asarray(a["stiffness"], float), damping=jnp.asarray(a["damping"], float),
+                    rest_length=jnp.asarray(a["rest_length"], float),
+                    direction=jnp.asarray(a["direction"], float)))
             elif kind == "mass_proportional":
                 acc = jnp.asarray(a["acceleration"], float)
                 if a["item"] in self._bodies:
