@@ -28,7 +28,7 @@ import numpy as np
 
 from .linalg import (AbstractSaddleSolver, AutoSaddleSolver, BlockTridiagonal, SaddleFactor, SaddleMatrix,
                      factor_chain, solve_symmetric_implicit)
-from .forces import force_tangent, reaction_force_tangent
+from .forces import force_tangent, force_tangent_local, reaction_force_tangent
 from .newton import ModifiedNewton
 from .system import System
 
@@ -39,9 +39,9 @@ def border_indices(system: System) -> np.ndarray:
 
 
 def solver_permutation(system: System) -> np.ndarray:
-    """Indices of q in solver order: chain (beam) coordinates, then the border."""
-    c = system.chain_slice()
-    return np.concatenate([np.arange(c.start, c.stop), border_indices(system)]).astype(int)
+    """Indices of q in solver order: chain (beam) coordinates in the system's chain
+    layout, then the border."""
+    return np.concatenate([system.chain_indices(), border_indices(system)]).astype(int)
 
 
 def to_solver_order(system: System, vec_q, vec_lam):
@@ -64,7 +64,7 @@ def saddle_matrix(system: System, chain: BlockTridiagonal | None, border_block, 
     """Bordered matrix [[K, Φ_qᵀ], [Φ_q, 0]] for a chain block K_cc (block tridiagonal),
     a border block K_bb (dense, (n_b, n_b)) and an optional symmetric chain–border
     coupling K_cb (dense, (n_c, n_b))."""
-    c = system.chain_slice()
+    c = system.chain_indices()
     bi = border_indices(system)
     jc, jb = jac[:, c], jac[:, bi]
     n_c, n_bc, m = system.chain_size, len(bi), jac.shape[0]
@@ -220,9 +220,11 @@ def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac, load_fa
     * reaction-dependent forces (friction): their exact linearization in q, v and λ
       (:func:`ancf_jax.forces.reaction_force_tangent`), a non-symmetric low-rank term;
     * force elements: each element's exact local linearization
-      (:func:`ancf_jax.forces.force_tangent`) over the coordinates it acts on,
-      added as a low-rank term (auxiliary unknowns of :class:`SaddleMatrix`), so a
-      spring between any two points, or a user-written law, is in the matrix.
+      (:func:`ancf_jax.forces.force_tangent`) over the coordinates it acts on: in the
+      chain where they lie in two neighbouring chain blocks (``system.banded_forces``:
+      droppers between interleaved wires, support springs), otherwise as a low-rank
+      term (auxiliary unknowns of :class:`SaddleMatrix`), so a spring between any two
+      points, or a user-written law, is in the matrix.
 
     ``load_factor`` scales the applied loads (statics' load stepping).
     """
@@ -233,7 +235,12 @@ def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac, load_fa
             nodes, vel = system.beam_nodes(q, i), system.beam_nodes(v, i)
             k = BlockTridiagonal.from_element_matrices(b.element_tangent(nodes, vel, gamma_p))
             parts.append(b.mass().scale(beta_p + b.alpha * gamma_p) + k)
-        chain = BlockTridiagonal.concatenate(parts)
+        chain = system.layout.assemble(parts)
+        if system.banded_forces:
+            position = np.argsort(solver_permutation(system))  # q index → solver row
+            for i in system.banded_forces:
+                idx, a = force_tangent_local(system.forces[i], system, q, v, t, gamma_p, load_factor)
+                chain = chain.add_local(jnp.asarray(position)[idx], a)
     bi = border_indices(system)
     border = jnp.diag(system.border_mass_diagonal() * beta_p)
     coupling = None
@@ -243,13 +250,14 @@ def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac, load_fa
             return jax.grad(lambda z: jnp.dot(lam, system.constraint(z, t)))(qq)
         h = jax.jacfwd(grad_lam_phi)(q[bi])  # (n, n_b): ∂²(λ·Φ)/∂q ∂q_border
         border = border + h[bi]
-        coupling = h[system.chain_slice()]
+        coupling = h[system.chain_indices()]
     matrix = saddle_matrix(system, chain, border, jac, coupling)
-    if system.forces:
+    others = [f for i, f in enumerate(system.forces) if i not in system.banded_forces]
+    if others:
         perm = solver_permutation(system)
         m = system.n_constraints
         ps, as_ = [], []
-        for f in system.forces:
+        for f in others:
             p, a = force_tangent(f, system, q, v, t, gamma_p, load_factor)
             ps.append(jnp.concatenate([p[:, perm], jnp.zeros((p.shape[0], m), p.dtype)], axis=1))
             as_.append(a)

@@ -100,12 +100,16 @@ class AbstractLoad(AbstractForce):
         return jnp.zeros_like(q)
 
 
-def _selection(idx, size, dtype):
-    """(k, size) one-hot rows selecting the indices idx, repeated indices counted once."""
+def _first(idx):
+    """True at the first occurrence of each index in idx, shape (k,)."""
     k = idx.shape[0]
     earlier = jnp.arange(k)[:, None] > jnp.arange(k)[None, :]
-    first = ~jnp.any((idx[:, None] == idx[None, :]) & earlier, axis=1)
-    return jax.nn.one_hot(idx, size, dtype=dtype) * first[:, None]
+    return ~jnp.any((idx[:, None] == idx[None, :]) & earlier, axis=1)
+
+
+def _selection(idx, size, dtype):
+    """(k, size) one-hot rows selecting the indices idx, repeated indices counted once."""
+    return jax.nn.one_hot(idx, size, dtype=dtype) * _first(idx)[:, None]
 
 
 def force_tangent(force: AbstractForce, system, q, v, t, damping_coef, load_factor=1.0):
@@ -121,17 +125,30 @@ def force_tangent(force: AbstractForce, system, q, v, t, damping_coef, load_fact
     and acts on these coordinates only). A is one ``jax.jacfwd`` over the k local
     coordinates of :meth:`AbstractForce.generalized_force`.
     """
+    idx, a = _local_tangent(force, system, q, v, t, damping_coef, load_factor)
+    return _selection(idx, q.shape[0], q.dtype), a
+
+
+def force_tangent_local(force: AbstractForce, system, q, v, t, damping_coef, load_factor=1.0):
+    """:func:`force_tangent` as ``(idx, A)``: the element's coordinate indices in q
+    (k,) and its local matrix (k, k) (rows and columns of repeated indices zero), for
+    adding into a structured matrix."""
+    return _local_tangent(force, system, q, v, t, damping_coef, load_factor)
+
+
+def _local_tangent(force, system, q, v, t, damping_coef, load_factor):
+    # gathers and scatters at idx (not products with a dense (k, n) selection: O(k)
+    # per direction besides the force itself, which matters with many elements)
     n = q.shape[0]
     idx = force.coordinates(system, q, t)
     idx = jnp.arange(n) if idx is None else jnp.asarray(idx)
-    p = _selection(idx, n, q.dtype)
-    k = idx.shape[0]
+    keep = _first(idx).astype(q.dtype)
 
     def local(d):
-        dq = p.T @ d
-        return p @ force.generalized_force(system, q + dq, v + damping_coef * dq, t, load_factor)
+        dq = jnp.zeros_like(q).at[idx].add(keep * d)
+        return keep * force.generalized_force(system, q + dq, v + damping_coef * dq, t, load_factor)[idx]
 
-    return p, -jax.jacfwd(local)(jnp.zeros(k, q.dtype))
+    return idx, -jax.jacfwd(local)(jnp.zeros(idx.shape[0], q.dtype))
 
 
 class BodyMassLoad(AbstractLoad):

@@ -14,6 +14,7 @@ import abc
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 
 class BlockTridiagonal(eqx.Module):
@@ -91,6 +92,26 @@ class BlockTridiagonal(eqx.Module):
         y = y.at[:-1].add(jnp.einsum("nij,nj->ni", self.upper, xb[1:]))
         return jnp.reshape(y, (n * b,))
 
+    def add_local(self, positions, a):
+        """The matrix plus a local (k, k) matrix ``a`` at rows and columns
+        ``positions`` (k,) (ints, may be traced) that lie in two consecutive blocks
+        (a force element between points of neighbouring nodes: a dropper between two
+        interleaved beams, a support spring). Entries at repeated positions add.
+
+        The block pair is found from the positions at run time; positions spread over
+        more than two consecutive blocks are outside the pattern (the caller checks,
+        :func:`within_two_blocks`)."""
+        n, b = self.n_blocks, self.block_size
+        positions = jnp.asarray(positions)
+        if n == 1:
+            w = jnp.zeros((b, b), a.dtype).at[positions[:, None], positions[None, :]].add(a)
+            return BlockTridiagonal(self.diagonal + w[None], self.lower, self.upper)
+        i0 = jnp.clip(jnp.min(positions) // b, 0, n - 2)
+        loc = positions - i0 * b
+        w = jnp.zeros((2 * b, 2 * b), a.dtype).at[loc[:, None], loc[None, :]].add(a)
+        diag = self.diagonal.at[i0].add(w[:b, :b]).at[i0 + 1].add(w[b:, b:])
+        return BlockTridiagonal(diag, self.lower.at[i0].add(w[b:, :b]), self.upper.at[i0].add(w[:b, b:]))
+
     def to_dense(self):
         """The dense matrix, shape (n_blocks · block_size,) × 2 (for tests and small systems)."""
         n, b = self.n_blocks, self.block_size
@@ -100,6 +121,87 @@ class BlockTridiagonal(eqx.Module):
         a = a.at[idx[1:], :, idx[:-1], :].set(self.lower)
         a = a.at[idx[:-1], :, idx[1:], :].set(self.upper)
         return jnp.reshape(a, (n * b, n * b))
+
+
+def within_two_blocks(positions, block_size: int) -> bool:
+    """Whether the (concrete) positions lie in two consecutive blocks of size
+    ``block_size`` (the pattern of :meth:`BlockTridiagonal.add_local`)."""
+    blocks = np.asarray(positions) // block_size
+    return blocks.size == 0 or int(blocks.max() - blocks.min()) <= 1
+
+
+# ---------------------------------------------------------------------- chain layouts
+class AbstractChainLayout(eqx.Module):
+    """Order of the beam coordinates in the block-tridiagonal chain of the solvers.
+
+    A layout maps the beams' node coordinates (each beam a chain of 4×4 node blocks,
+    beams one after another in q) to the rows of one :class:`BlockTridiagonal`, so
+    that every coupling the solver should see as banded lies in neighbouring blocks.
+    """
+
+    @abc.abstractmethod
+    def order(self, sizes: tuple[int, ...]) -> np.ndarray:
+        """Indices of the beam coordinates (counted from the first beam coordinate in
+        q; beams of ``sizes`` coordinates one after another) in chain order."""
+
+    @abc.abstractmethod
+    def assemble(self, parts) -> BlockTridiagonal:
+        """The chain matrix from one block-tridiagonal matrix (4×4 blocks) per beam."""
+
+    @abc.abstractmethod
+    def block_size(self, n_beams: int) -> int:
+        """Size of the chain's blocks for ``n_beams`` beams."""
+
+
+class SequentialChain(AbstractChainLayout):
+    """Beams one after another, node blocks of 4 (no coupling between beams in the
+    pattern: a force element between two beams is a low-rank border term)."""
+
+    def order(self, sizes):
+        return np.arange(int(sum(sizes)))
+
+    def assemble(self, parts):
+        return BlockTridiagonal.concatenate(parts)
+
+    def block_size(self, n_beams):
+        return 4
+
+
+class InterleavedChain(AbstractChainLayout):
+    """Beams side by side: block i holds node i of every beam (block size 4 × the
+    number of beams), for beams with the same number of node slots laid out along a
+    common track (the contact and messenger wires of a catenary, meshed with nodes at
+    the same x). A force element between two beams at the same node interval (a
+    dropper) then lies in neighbouring blocks and enters the chain instead of the
+    border: the cost per step stays linear in the element count whatever the number
+    of droppers (:meth:`BlockTridiagonal.add_local`)."""
+
+    def order(self, sizes):
+        sizes = tuple(int(s) for s in sizes)
+        if len(set(sizes)) != 1 or sizes[0] % 4:
+            raise ValueError(f"InterleavedChain needs beams with the same number of node slots, got "
+                             f"{[s // 4 for s in sizes]} nodes")
+        m, n = len(sizes), sizes[0] // 4
+        # q index of (beam j, node i, coordinate c) is j·4n + 4i + c; chain order (i, j, c)
+        return np.reshape(np.arange(m * n * 4).reshape(m, n, 4).transpose(1, 0, 2), (-1,))
+
+    def assemble(self, parts):
+        parts = list(parts)
+        m = len(parts)
+
+        def interleave(blocks):  # (m, k, 4, 4) → (k, 4m, 4m) block diagonal per node
+            k = blocks.shape[1]
+            out = jnp.zeros((k, m, 4, m, 4), blocks.dtype)
+            idx = jnp.arange(m)
+            out = out.at[:, idx, :, idx, :].set(blocks)
+            return jnp.reshape(out, (k, 4 * m, 4 * m))
+
+        stack = lambda name: jnp.stack([getattr(p, name) for p in parts])  # noqa: E731
+        return BlockTridiagonal(interleave(stack("diagonal")), interleave(stack("lower")),
+                                interleave(stack("upper")))
+
+    def block_size(self, n_beams):
+        return 4 * n_beams
 
 
 # ---------------------------------------------------------------------- block Thomas

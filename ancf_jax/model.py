@@ -41,6 +41,7 @@ from .contact import AtArcLength, AtHorizontalPosition, MovingForce, UnilateralC
 from .forces import (BeamMassLoad, BodyMassLoad, CompressionOnlySpringDamper, DirectedSpringDamper,
                      PointForce, PointTorque,
                      SpringDamper, TensionOnlySpringDamper)
+from .linalg import AbstractChainLayout, InterleavedChain, SequentialChain, within_two_blocks
 from .mesh import BeamMesh, pad
 from .newton import ModifiedNewton
 from .section import Section
@@ -810,7 +811,8 @@ class Model:
                     point(a[key], what)
 
     def build(self, *, pad_to: dict | int | None = None, hold: bool | None = None,
-              assemble: bool = True, tolerance: float = 1e-10) -> tuple[System, State]:
+              assemble: bool = True, tolerance: float = 1e-10,
+              layout: AbstractChainLayout | None = None) -> tuple[System, State]:
         """Resolve names, check the constraints and return ``(system, initial_state)``.
 
         Args:
@@ -821,6 +823,12 @@ class Model:
                 the kinetic-energy projection of :func:`project_velocities`: given
                 velocities and rates are kept as far as the joints allow).
             tolerance: constraint residual accepted without projection [m].
+            layout: order of the beam coordinates in the solvers' chain
+                (:class:`~ancf_jax.linalg.SequentialChain` or
+                :class:`~ancf_jax.linalg.InterleavedChain`); None: interleaved when
+                beams with equal node slots are coupled by force elements that the
+                interleaved chain holds (a catenary's droppers), else sequential
+                (:func:`chain_structure`).
 
         Raises:
             ModelError: unknown names, points outside a beam, bad indices.
@@ -1028,12 +1036,56 @@ class Model:
                         body_names=tuple(body_names), beam_names=tuple(beam_names),
                         sliding_names=tuple(slider_names), gravity_off=gravity_off,
                         reaction_forces=reaction_forces)
+        system = chain_structure(system, jnp.asarray(q0), layout)
         v0 = np.asarray(system.pack(body_vel, vel0, s_rate))
         state = State(jnp.asarray(q0), jnp.asarray(v0), jnp.zeros(()))
         if assemble:
             state = assemble_state(system, state, tolerance=tolerance,
                                    given=self.given_velocities(system))
         return system, state
+
+
+# ---------------------------------------------------------------------- chain structure
+def _banded(system: System, q, layout: AbstractChainLayout) -> tuple[int, ...]:
+    """Indices of the force elements whose coordinates at q lie in two neighbouring
+    blocks of the chain in ``layout``."""
+    trial = dataclasses.replace(system, layout=layout, banded_forces=())
+    position = np.argsort(dae.solver_permutation(trial))
+    n_chain, size = trial.chain_size, layout.block_size(len(system.beams))
+    out = []
+    for i, f in enumerate(system.forces):
+        idx = f.coordinates(trial, q, 0.0)
+        if idx is None:
+            continue
+        pos = position[np.asarray(idx, int)]
+        if pos.size and pos.max() < n_chain and within_two_blocks(pos, size):
+            out.append(i)
+    return tuple(out)
+
+
+def chain_structure(system: System, q, layout: AbstractChainLayout | None = None) -> System:
+    """The system with its chain layout and banded force elements set (at q).
+
+    A force element whose coordinates all lie in two neighbouring blocks of the
+    chain (a support spring on a beam, a dropper between two interleaved wires) has
+    its Newton matrix added to the block-tridiagonal chain; any other is a low-rank
+    border term, whose cost grows with the cube of the number of such elements.
+    ``layout`` None chooses :class:`~ancf_jax.linalg.InterleavedChain` when the beams
+    have equal node slots and it holds more force elements in the chain than the
+    sequential layout does."""
+    if not system.beams:
+        return system
+    if layout is None:
+        layout = SequentialChain()
+        banded = _banded(system, q, layout)
+        sizes = {b.n_coordinates for b in system.beams}
+        if len(system.beams) > 1 and len(sizes) == 1:
+            inter = _banded(system, q, InterleavedChain())
+            if len(inter) > len(banded):
+                layout, banded = InterleavedChain(), inter
+    else:
+        banded = _banded(system, q, layout)
+    return dataclasses.replace(system, layout=layout, banded_forces=banded)
 
 
 # ---------------------------------------------------------------------- assembly checks

@@ -29,7 +29,7 @@ import numpy as np
 
 from .beam import Beam
 from .bodies import RigidBodies
-from .linalg import BlockTridiagonal
+from .linalg import AbstractChainLayout, BlockTridiagonal, SequentialChain
 
 
 class State(eqx.Module):
@@ -56,6 +56,14 @@ class System(eqx.Module):
         body_names, beam_names, sliding_names: names for messages and outputs (static).
         gravity_off: names of the bodies and beams that gravity does not act on (static;
             empty: on all).
+        layout: order of the beam coordinates in the solvers' block-tridiagonal chain
+            (:class:`~ancf_jax.linalg.SequentialChain`: beam after beam;
+            :class:`~ancf_jax.linalg.InterleavedChain`: node i of every beam in one
+            block, for beams along a common track).
+        banded_forces: indices in ``forces`` of the force elements whose coordinates
+            lie in two neighbouring chain blocks (static, found by
+            :meth:`ancf_jax.model.Model.build`): their Newton matrix enters the chain
+            instead of the border.
     """
 
     bodies: RigidBodies
@@ -69,6 +77,8 @@ class System(eqx.Module):
     sliding_names: tuple = eqx.field(static=True, default=())
     gravity_off: tuple = eqx.field(static=True, default=())
     reaction_forces: tuple = ()
+    layout: AbstractChainLayout = eqx.field(static=True, default=SequentialChain())
+    banded_forces: tuple = eqx.field(static=True, default=())
 
     # ------------------------------------------------------------------ layout
     @property
@@ -108,6 +118,13 @@ class System(eqx.Module):
     def chain_slice(self) -> slice:
         """Slice of q holding all beam coordinates (the block-tridiagonal part)."""
         return slice(3 * self.n_bodies, self.sliding_offset)
+
+    def chain_indices(self) -> np.ndarray:
+        """Indices in q of the beam coordinates in chain order (:attr:`layout`)."""
+        if not self.beams:
+            return np.zeros(0, int)
+        order = self.layout.order(tuple(b.n_coordinates for b in self.beams))
+        return (3 * self.n_bodies + order).astype(int)
 
     def coordinate_labels(self) -> tuple[str, ...]:
         """One label per coordinate of q, in order, with its SI unit: ``body:NAME.x [m]``
@@ -168,8 +185,9 @@ class System(eqx.Module):
         return eqx.tree_at(lambda s: s.beams, self, beams) if self.beams else self
 
     def beam_mass(self) -> BlockTridiagonal:
-        """Mass matrix of the beam chain (block tridiagonal, dummy unit mass on padding)."""
-        return BlockTridiagonal.concatenate([b.mass() for b in self.beams])
+        """Mass matrix of the beam chain in chain order (:meth:`chain_indices`; block
+        tridiagonal, dummy unit mass on padding)."""
+        return self.layout.assemble([b.mass() for b in self.beams])
 
     def border_mass_diagonal(self):
         """Diagonal mass of the border coordinates (bodies: m, m, J; sliding: 0)."""
@@ -182,8 +200,8 @@ class System(eqx.Module):
         nb3 = 3 * self.n_bodies
         m = m.at[:nb3, :nb3].set(jnp.diag(self.bodies.mass_diagonal()))
         if self.beams:
-            c = self.chain_slice()
-            m = m.at[c, c].set(self.beam_mass().to_dense())
+            c = self.chain_indices()
+            m = m.at[np.ix_(c, c)].set(self.beam_mass().to_dense())
         return m
 
     def mass_times(self, v):
@@ -192,7 +210,7 @@ class System(eqx.Module):
         nb3 = 3 * self.n_bodies
         out = out.at[:nb3].set(self.bodies.mass_diagonal() * v[:nb3])
         if self.beams:
-            c = self.chain_slice()
+            c = self.chain_indices()
             out = out.at[c].set(self.beam_mass().matvec(v[c]))
         return out
 

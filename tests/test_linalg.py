@@ -5,8 +5,9 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from ancf_jax.linalg import (BlockTridiagonal, SaddleMatrix, factor_chain, factor_saddle, lu_factor,
-                             lu_solve, solve_chain, solve_saddle, solve_symmetric_implicit)
+from ancf_jax.linalg import (BlockTridiagonal, InterleavedChain, SaddleMatrix, SequentialChain, factor_chain,
+                             factor_saddle, lu_factor, lu_solve, solve_chain, solve_saddle,
+                             solve_symmetric_implicit, within_two_blocks)
 
 
 def _chain(rng, n_blocks=5, b=4):
@@ -92,3 +93,33 @@ def test_lu_under_vmap(rng):
     rhs = rng.normal(size=(4, 6))
     x = jax.vmap(lambda m, r: lu_solve(lu_factor(m), r))(jnp.asarray(a), jnp.asarray(rhs))
     np.testing.assert_allclose(x, np.linalg.solve(a, rhs[..., None])[..., 0], rtol=1e-10, atol=1e-12)
+
+
+def test_add_local_matches_a_dense_scatter(rng):
+    """A local matrix at positions in two neighbouring blocks (repeats add) lands where
+    a dense scatter puts it, also at the last block pair and for a one-block chain."""
+    for n_blocks, positions in ((5, [5, 6, 9, 11, 6]), (5, [16, 19, 17]), (1, [0, 3, 3])):
+        t = _chain(rng, n_blocks=n_blocks)
+        a = rng.normal(size=(len(positions), len(positions)))
+        dense = np.asarray(t.to_dense()).copy()
+        np.add.at(dense, (np.asarray(positions)[:, None], np.asarray(positions)[None, :]), a)
+        got = t.add_local(jnp.asarray(positions), jnp.asarray(a)).to_dense()
+        np.testing.assert_allclose(got, dense, rtol=0, atol=1e-14)
+    assert within_two_blocks([5, 6, 9, 11], 4) and not within_two_blocks([3, 8], 4)
+
+
+def test_interleaved_layout_orders_nodes_of_all_beams_side_by_side(rng):
+    """Chain order (node, beam, coordinate); the assembled chain is the beams' matrices
+    permuted into that order (one dense check), and the sequential layout is the
+    identity."""
+    parts = [_chain(rng, n_blocks=3), _chain(rng, n_blocks=3)]
+    order = InterleavedChain().order((12, 12))
+    np.testing.assert_array_equal(order[:8], [0, 1, 2, 3, 12, 13, 14, 15])
+    full = np.zeros((24, 24))
+    full[:12, :12], full[12:, 12:] = parts[0].to_dense(), parts[1].to_dense()
+    got = InterleavedChain().assemble(parts)
+    assert got.block_size == 8 == InterleavedChain().block_size(2)
+    np.testing.assert_array_equal(got.to_dense(), full[np.ix_(order, order)])
+    np.testing.assert_array_equal(SequentialChain().order((12, 8)), np.arange(20))
+    with pytest.raises(ValueError, match="same number of node slots"):
+        InterleavedChain().order((12, 8))

@@ -103,9 +103,34 @@ def beta_set_after_build():
     return Parameter("beta", "beta", "beam", 0).set(system, 2e-4), state
 
 
-@pytest.mark.parametrize("case", ["m1_beta", "m1_beta_set", "m2", "m1_forces"])
+def two_wires(layout=None):
+    """Two pinned wires one above the other joined by tension-only droppers at
+    matching arc lengths (inside elements and at a node) and a support spring: the
+    droppers and the spring enter the chain (:func:`ancf_jax.model.chain_structure`)."""
+    from ancf_jax import mesh
+    from ancf_jax.model import Model, beam_point, ground, node
+    from ancf_jax.section import Section
+    m = Model(gravity=(0.0, -9.81))
+    section = Section.from_stiffness(1e5, 10.0, 1.0)
+    m.add_beam("contact", mesh.straight((0, 0), (1, 0), 4.0, 8), section, beta=1e-4)
+    m.add_beam("messenger", mesh.straight((0, 1), (1, 0), 4.0, 8), section)
+    for b in ("contact", "messenger"):
+        m.pin(f"{b}.start", node(b, 0))
+        m.pin(f"{b}.end", node(b, -1))
+    for i, s in enumerate((0.75, 1.5, 2.0, 3.1)):
+        m.spring_damper(f"dropper{i}", beam_point("contact", s), beam_point("messenger", s),
+                        stiffness=1e3, damping=2.0, rest_length=0.99, acts="tension")
+    m.spring_damper("support", beam_point("messenger", 2.0), ground(2.0, 1.5), stiffness=1e3)
+    return m.build(layout=layout)
+
+
+@pytest.mark.parametrize("case", ["m1_beta", "m1_beta_set", "m2", "m1_forces", "two_wires"])
 def test_iteration_matrix_is_the_jacobian_of_the_residual(case):
-    if case == "m2":
+    if case == "two_wires":
+        from ancf_jax.linalg import InterleavedChain
+        system, state = two_wires()
+        assert isinstance(system.layout, InterleavedChain) and system.banded_forces == (0, 1, 2, 3, 4)
+    elif case == "m2":
         system, state, _ = m2_initial(n_elements=12)
     elif case == "m1_beta":
         system, state = m1_model(beta=2e-4).build()
@@ -164,6 +189,24 @@ def test_low_rank_border_solves_like_dense():
         x = solve_saddle(factor_saddle(a, dense=use_dense), r)
         np.testing.assert_allclose(x, x_ref, rtol=1e-9, atol=1e-12 * float(jnp.max(jnp.abs(x_ref))))
     np.testing.assert_allclose(a.matvec(x_ref), r, atol=1e-9 * float(jnp.max(jnp.abs(r))))
+
+
+def test_banded_force_elements_leave_the_border():
+    """With the droppers in the interleaved chain the border holds only the pins'
+    multipliers (no auxiliary unknowns) and solves equal a dense solve; the sequential
+    layout keeps them as 4 × 16 auxiliary unknowns (the support spring, on one beam, is
+    banded in both)."""
+    from ancf_jax.linalg import SequentialChain, factor_saddle, solve_saddle
+    for layout, n_aux in ((None, 0), (SequentialChain(), 64)):
+        system, state = two_wires(layout)
+        q, v, lam = perturbed(system, state, 2)
+        jac = eqx.filter_jit(system.constraint_jacobian)(q, 0.0)
+        a = eqx.filter_jit(dae.iteration_matrix)(system, q, v, lam, 0.0, 3.7e5, 1.1e3, jac)
+        assert a.n_aux == n_aux and a.e.shape[0] == n_aux + system.n_constraints
+        r = jax.random.normal(jax.random.PRNGKey(4), (a.size,))
+        x_ref = jnp.linalg.solve(a.effective_dense(), r)
+        x = solve_saddle(factor_saddle(a), r)
+        np.testing.assert_allclose(x, x_ref, rtol=1e-8, atol=1e-11 * float(jnp.max(jnp.abs(x_ref))))
 
 
 def iterations_per_step(system, state, t_end=0.05, dt=1e-3):
