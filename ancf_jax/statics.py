@@ -23,7 +23,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from . import dae
 from .errors import StaticsError
+from .newton import ModifiedNewton
 from .system import State, System
 from .validation import check_count, check_positive
 
@@ -134,14 +136,70 @@ def _solve(system: System, q0, lam0, t, load_factors, tolerance, max_iterations,
     return x[:n], x[n:] * fscale, its, res, ok
 
 
+#: a root finder for the structured static solve (:func:`solve_static` given
+#: ``root_finder=STATIC_NEWTON``): full Newton on the structured Newton matrix, converged when
+#: the correction is below 1e-10 of the model size (a step rule: the residual of
+#: stiff, finely meshed wires stalls at its round-off floor, the step does not)
+STATIC_NEWTON = ModifiedNewton(tolerance=1e-10, max_iterations=50, contraction=0.0)
+
+
+@eqx.filter_jit
+def _solve_structured(system: System, q0, lam0, t, load_factors, root_finder: ModifiedNewton,
+                      regularization):
+    """Load-stepped Newton with the structured Newton matrix of
+    :func:`ancf_jax.dae.iteration_matrix` at β' = ε, γ' = 0 (its static
+    linearization; ε a mass-proportional regularization, which leaves the residual,
+    hence the solution, unchanged): O(elements) per iteration, for wires of thousands
+    of elements where the dense Jacobian of :func:`_solve` is O(n³)."""
+    n = q0.shape[0]
+    zero_v = jnp.zeros_like(q0)
+    fscale = _load_scale(system, q0, t)
+    lscale = jnp.maximum(jnp.max(jnp.abs(q0)), 1.0)
+    # ε: ``regularization`` × (largest stiffness entry of the beams / largest mass entry)
+    probe = dae.iteration_matrix(system, q0, zero_v, lam0, t, 0.0, 0.0, system.constraint_jacobian(q0, t))
+    kscale = jnp.max(jnp.abs(probe.chain.diagonal)) if probe.chain is not None else jnp.max(jnp.abs(probe.e))
+    m = jnp.diag(system.mass_matrix()) if probe.chain is None else jnp.concatenate(
+        [jnp.abs(jax.vmap(jnp.diag)(system.beam_mass().diagonal)).reshape(-1), system.border_mass_diagonal()])
+    beta_p = regularization * kscale / jnp.maximum(jnp.max(m), 1e-300)
+
+    def load_step(carry, lf):
+        y, failed = carry
+
+        def residual(x):
+            q, lam = dae.from_solver_order(system, x)
+            r, phi = static_residual(system, q, lam, t, lf, q0)
+            return dae.to_solver_order(system, r, phi)
+
+        def linearize(x):
+            q, lam = dae.from_solver_order(system, x)
+            return dae.iteration_matrix(system, q, zero_v, lam, t, beta_p, 0.0,
+                                        system.constraint_jacobian(q, t), lf)
+
+        sol = root_finder.solve(residual, linearize, y, size=n, scale=lscale,
+                                residual_norm=lambda r: jnp.max(jnp.abs(r[:n])) / fscale)
+        ok = sol.converged & ~failed
+        y_out = jnp.where(ok, sol.x, y)
+        return (y_out, failed | ~ok), (sol.iterations, sol.residual_norm, ok)
+
+    y0 = dae.to_solver_order(system, q0, lam0)
+    (y, _), (its, res, ok) = jax.lax.scan(load_step, (y0, jnp.array(False)), load_factors)
+    q, lam = dae.from_solver_order(system, y)
+    return q, lam, its, res, ok
+
+
 def solve_static_pure(system: System, state: State, *, load_steps: int = 1,
                       tolerance: float = 1e-9, max_iterations: int = 50,
-                      regularization: float = 1e-12) -> StaticSolution:
+                      regularization: float = 1e-12,
+                      root_finder: ModifiedNewton | None = None) -> StaticSolution:
     """Jittable/vmappable static solve; never raises (check ``converged``)."""
     load_factors = jnp.arange(1, load_steps + 1, dtype=float) / load_steps
     lam0 = jnp.zeros(system.n_constraints)
-    q, lam, its, res, ok = _solve(system, state.q, lam0, jnp.asarray(state.t, float), load_factors,
-                                  tolerance, max_iterations, regularization)
+    if root_finder is not None:
+        q, lam, its, res, ok = _solve_structured(system, state.q, lam0, jnp.asarray(state.t, float),
+                                                 load_factors, root_finder, regularization)
+    else:
+        q, lam, its, res, ok = _solve(system, state.q, lam0, jnp.asarray(state.t, float), load_factors,
+                                      tolerance, max_iterations, regularization)
     # full Newton steps may turn a body by whole revolutions: report angles in (−π, π]
     theta = 3 * jnp.arange(system.n_bodies) + 2
     q = q.at[theta].set(jnp.pi - jnp.mod(jnp.pi - q[theta], 2 * jnp.pi))
@@ -149,7 +207,8 @@ def solve_static_pure(system: System, state: State, *, load_steps: int = 1,
 
 
 def solve_static(system: System, state: State, *, load_steps: int = 1, tolerance: float = 1e-9,
-                 max_iterations: int = 50, regularization: float = 1e-12) -> StaticSolution:
+                 max_iterations: int = 50, regularization: float = 1e-12,
+                 root_finder: ModifiedNewton | None = None) -> StaticSolution:
     """Static equilibrium from the initial guess ``state`` (see module docstring).
 
     Args:
@@ -160,6 +219,12 @@ def solve_static(system: System, state: State, *, load_steps: int = 1, tolerance
         regularization: relative weight of a mass-proportional term added to the Newton
             matrix (not the residual) so that unloaded, unconstrained coordinates do not
             make it singular.
+        root_finder: None (default): Newton on the dense Jacobian (O(n³): a few hundred
+            elements at most). A :class:`~ancf_jax.newton.ModifiedNewton` (e.g.
+            :data:`STATIC_NEWTON`): Newton on the structured (block-tridiagonal,
+            bordered) Newton matrix (:func:`_solve_structured`, linear in the element
+            count), stopped by the root finder's step rule (``tolerance`` and
+            ``max_iterations`` then unused).
 
     Raises:
         StaticsError: a load step did not converge; names the step, its load factor and
@@ -169,7 +234,8 @@ def solve_static(system: System, state: State, *, load_steps: int = 1, tolerance
     tolerance = check_positive("tolerance", tolerance)
     max_iterations = check_count("max_iterations", max_iterations, 1)
     sol = solve_static_pure(system, state, load_steps=load_steps, tolerance=tolerance,
-                            max_iterations=max_iterations, regularization=regularization)
+                            max_iterations=max_iterations, regularization=regularization,
+                            root_finder=root_finder)
     ok = np.asarray(sol.converged)
     if not ok.all():
         k = int(np.argmin(ok))
