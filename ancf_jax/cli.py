@@ -109,7 +109,7 @@ def build_parser() -> argparse.ArgumentParser:
                      description="Differentiable planar ANCF beams and cables with rigid multibody "
                                  "systems (Seo, Jung & Park), on JAX. MODEL is a shipped scenario "
                                  "(m1, m2, flexible_pendulum, cantilever_tip_load, hanging_chain, "
-                                 "cable_car, hauled_cabin) or a scenario file (.toml or .json). "
+                                 "cable_car, hauled_cabin, pantograph_catenary) or a scenario file (.toml or .json). "
                                  "Exit status: 0 done, 1 failed "
                                  "run (results up to then written), 2 bad input (one line), 130 "
                                  "interrupted (results up to then written).")
@@ -479,6 +479,22 @@ def _run(args) -> int:
               f"{', one vmapped batch' if len(labels) > 1 else ''}): "
               f"max distance of point-1 trajectories {dist or 'n/a'}; compile "
               f"{results[0].compile_time_s:.1f} s, run {summary['batch_wall_time_s']:.2f} s -> {out}/")
+    elif base.spec.pantograph is not None and len(runs) == 1:
+        from .models.catenary import analyse_pantograph_run
+        from .reports import report_pantograph
+        from .scenario.build import pantograph_start
+        p, r = base.spec.pantograph, results[0]
+        run = analyse_pantograph_run(r, base.spec.catenary.design(), speed_kmh=p.speed_kmh,
+                                     start=pantograph_start(base.spec), spans=p.spans, cutoff=p.cutoff)
+        data = report_pantograph(run, out, figures=figures, precision=base.spec.outputs.precision)
+        outside = [row["key"] for row in data["en50318_2002"] or () if not row["inside"]]
+        ranges = ("" if data["en50318_2002"] is None else
+                  f"; EN 50318:2002 ranges: {'all inside' if not outside else 'outside: ' + ', '.join(outside)}")
+        print(f"{base.name}: {p.speed_kmh:g} km/h, spans {data['spans_evaluated']}: contact force mean "
+              f"{data['mean_N']:.1f} N, std {data['std_N']:.1f} N, max {data['max_N']:.1f} N, min "
+              f"{data['min_N']:.1f} N, uplift {data['uplift_support_mm']:.1f} mm, loss "
+              f"{data['contact_loss_pct']:.1f} %{ranges}; compile {r.compile_time_s:.1f} s, run "
+              f"{r.wall_time_s:.1f} s -> {out}/")
     else:
         report_scenario(base.name, runs, base.outputs, out, figures=figures, animate=args.animate,
                         precision=base.spec.outputs.precision)

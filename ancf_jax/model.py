@@ -1390,7 +1390,7 @@ def assemble_state(system: System, state: State, *, tolerance: float = 1e-10,
 
 def build_in_equilibrium(model: Model, *, load_steps: int = 10, pad_to=None,
                          tolerance: float = 1e-9, check_stability: bool = True,
-                         hold: bool | None = False):
+                         hold: bool | None = False, root_finder: ModifiedNewton | None = None):
     """Static equilibrium with every sliding joint held, then released.
 
     Builds the system with the holds (``hold=True``), solves the statics from the
@@ -1409,6 +1409,9 @@ def build_in_equilibrium(model: Model, *, load_steps: int = 10, pad_to=None,
     Args:
         hold: holds of the returned system: False releases every sliding joint, None
             keeps those added with ``hold=True``.
+        root_finder: the static solve's root finder (:func:`~ancf_jax.statics.solve_static`;
+            None: dense Newton; ``statics.STATIC_NEWTON``: structured, for thousands of
+            elements, where ``check_stability``'s dense modal analysis is too costly too).
 
     Returns:
         (released system, initial State, StaticSolution of the held system).
@@ -1424,7 +1427,7 @@ def build_in_equilibrium(model: Model, *, load_steps: int = 10, pad_to=None,
     held, guess = model.build(pad_to=pad_to, hold=True, assemble=False)
     guess = assemble_state(held, State(guess.q, jnp.zeros_like(guess.v), guess.t),
                            given=np.zeros(held.n_coordinates, bool))
-    sol = solve_static(held, guess, load_steps=load_steps, tolerance=tolerance)
+    sol = solve_static(held, guess, load_steps=load_steps, tolerance=tolerance, root_finder=root_finder)
     if check_stability:
         w = modal_analysis(held, sol.state.q, sol.multipliers).angular_frequencies
         w2 = np.sign(w) * w * w

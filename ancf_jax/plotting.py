@@ -207,3 +207,40 @@ def animate(results: Results, beam: str, path, *, bodies: Sequence[str] = (), li
         anim.save(path, writer=animation.PillowWriter(fps=fps))
     plt.close(fig)
     return path
+
+
+def pantograph_figures(run, out_dir) -> None:
+    """Figures of a pantograph–catenary run (:func:`ancf_jax.reports.report_pantograph`):
+    ``contact_force.png`` (raw and filtered along the track, the evaluated window
+    shaded), ``uplift.png`` (contact wire at the evaluated poles vs the pantograph's
+    position) and ``dropper_slack.png`` (slack droppers, by position, vs the
+    pantograph's position)."""
+    out = Path(out_dir)
+    fig, ax = plt.subplots(figsize=(9, 3.5))
+    ax.axvspan(*run.window, color="0.92", label="evaluated")
+    ax.plot(run.x, run.force, lw=0.6, color="0.6", label="contact force")
+    ax.plot(run.x, run.filtered, lw=1.2, color="C0", label="filtered (20 Hz)")
+    ax.set_xlabel("pantograph position x [m]")
+    ax.set_ylabel("contact force [N]")
+    ax.legend(loc="upper right", fontsize=8)
+    _finish(fig, out / "contact_force.png")
+    fig, ax = plt.subplots(figsize=(9, 3.5))
+    for j in range(run.uplift.shape[1]):
+        ax.plot(run.x, 1e3 * run.uplift[:, j], lw=1.0, label=f"pole {j + 1}")
+    ax.set_xlabel("pantograph position x [m]")
+    ax.set_ylabel("contact wire uplift [mm]")
+    ax.legend(fontsize=8)
+    _finish(fig, out / "uplift.png")
+    system = run.results.system
+    names = [f.name for f in system.forces if f.name.startswith("catenary.dropper")]
+    if names:
+        slack = np.stack([run.results.member(n)[:, 1] < 0.5 for n in names], axis=1)
+        xd = np.array([float(system.forces[[f.name for f in system.forces].index(n)].a.position(
+            system, np.asarray(run.results.q[0]))[0]) for n in names])
+        fig, ax = plt.subplots(figsize=(9, 3.5))
+        ii, jj = np.nonzero(slack)
+        ax.scatter(run.x[ii], xd[jj], s=2, color="C3")
+        ax.set_xlabel("pantograph position x [m]")
+        ax.set_ylabel("slack dropper at x [m]")
+        ax.set_title(f"slack droppers ({int(slack.any(axis=0).sum())} of {len(names)} go slack)")
+        _finish(fig, out / "dropper_slack.png")

@@ -206,3 +206,25 @@ def report_scenario(name: str, runs: dict, outputs, out_dir: str | Path, *, figu
     summary = dict(model=name, runs=per, units=output_units(outputs))
     _json(out / "summary.json", summary)
     return summary
+
+
+def report_pantograph(run, out_dir: str | Path, *, figures: bool = True, precision: int | None = None) -> dict:
+    """Write a pantograph–catenary run (:class:`~ancf_jax.models.catenary.PantographRun`):
+    ``statistics.json`` (the keys of :data:`~ancf_jax.models.catenary.STATISTICS_KEYS`,
+    the EN 50318:2002 ranges at 250 and 300 km/h as ``en50318_2002`` rows, the
+    evaluated window and the run's diagnostics), ``contact_force.csv``
+    (``t,x,contact_force_N,contact_force_filtered_N``) and figures: the contact force
+    along the track, the contact wire's uplift at the poles and the droppers' slack
+    map (which dropper is slack where the pantograph is)."""
+    from .models.catenary import STATISTICS_KEYS, against_ranges
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    stats = {k: run.statistics[k] for k in STATISTICS_KEYS}
+    data = dict(stats, en50318_2002=against_ranges(stats), window_m=list(run.window),
+                run=run.results.summary())
+    _json(out / "statistics.json", data)
+    write_csv(out / "contact_force.csv", dict(t=run.t, x=run.x, contact_force_N=run.force,
+                                              contact_force_filtered_N=run.filtered), precision)
+    if figures:
+        plotting.pantograph_figures(run, out)
+    return data

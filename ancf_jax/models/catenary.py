@@ -607,3 +607,168 @@ def contact_statistics(t, x, force, *, window, cutoff: float = 20.0, uplift=None
                 uplift_support_mm=None if uplift is None else 1e3 * float(uplift),
                 contact_loss_pct=100.0 * float(np.mean(f[sel] <= 0.0)),
                 spans_evaluated=spans_evaluated, filtered=filtered)
+
+
+# ---------------------------------------------------------------------- the coupled model
+#: the pantograph's name in :func:`pantograph_catenary` (its contact: ``"pantograph.contact"``)
+PANTOGRAPH = "pantograph"
+
+
+def pantograph_catenary(catenary: CatenaryDesign = CatenaryDesign(), pantograph: PantographDesign = PantographDesign(),
+                        *, speed, start: float | None = None):
+    """A model of a pantograph running at ``speed`` [m/s] (may be traced data) under a
+    catenary, from ``start`` [m] (default: a tenth of the first dropper's distance
+    from the first pole). Returns
+    ``(model, names)``: build with ``model.build(assemble=False)`` and start from
+    :func:`moving_equilibrium` (the design state is consistent with every joint)."""
+    from ..model import Model
+    m = Model(gravity=(0.0, -G))
+    names = add_catenary(m, catenary)
+    x0 = 0.1 * float(catenary.droppers[0]) if start is None else float(start)
+    if not 0.0 < x0 < catenary.length:
+        raise ModelError(f"pantograph start must be inside the line (0, {catenary.length:g}) m, got {x0!r}")
+    add_pantograph(m, names, pantograph, start=x0, speed=speed, name=PANTOGRAPH)
+    return m, names
+
+
+def moving_equilibrium(system, guess, *, load_steps: int = 2):
+    """The initial state of a run: the static equilibrium at t = 0 (structured Newton,
+    :data:`~ancf_jax.statics.STATIC_NEWTON`; raises a :class:`~ancf_jax.errors.StaticsError`)
+    with the beams at rest and the border coordinates (bodies) moving as the joints
+    prescribe (Φ_q v = −Φ_t, least squares over the border). Returns
+    ``(State, StaticSolution)``."""
+    import jax.numpy as jnp
+
+    from ..model import _JACOBIAN, _TIME_DERIVATIVE
+    from ..statics import STATIC_NEWTON, solve_static
+    from ..system import State
+    sol = solve_static(system, guess, load_steps=load_steps, root_finder=STATIC_NEWTON)
+    q = sol.state.q
+    border = system.border_indices()
+    jac = np.asarray(_JACOBIAN(system, q, 0.0))
+    phi_t = np.asarray(_TIME_DERIVATIVE(system, q, 0.0))
+    vb, *_ = np.linalg.lstsq(jac[:, border], -phi_t, rcond=None)
+    if np.max(np.abs(jac[:, border] @ vb + phi_t), initial=0.0) > 1e-9 * max(1.0, np.max(np.abs(phi_t))):
+        raise ModelError("the prescribed motions at t = 0 cannot be met by the bodies alone (a beam "
+                         "coordinate is driven); start from a consistent state instead")
+    v = np.zeros(system.n_coordinates)
+    v[border] = vb
+    return State(q, jnp.asarray(v), jnp.zeros(())), sol
+
+
+@dataclasses.dataclass(frozen=True)
+class PantographRun:
+    """Outcome of :func:`run_pantograph_catenary`.
+
+    Attributes:
+        results: the run (:class:`~ancf_jax.results.Results`).
+        t, x: output times [s] and pantograph positions [m], shape (N,).
+        force, filtered: contact force and its low-pass filtered version [N], (N,).
+        uplift: contact-wire uplift at the poles of the evaluated spans [m], shape
+            (N, p) (y − y at t = 0).
+        window: the evaluated stretch of track (x_from, x_to) [m].
+        statistics: :func:`contact_statistics` (without ``filtered``).
+    """
+
+    results: object
+    t: np.ndarray
+    x: np.ndarray
+    force: np.ndarray
+    filtered: np.ndarray
+    uplift: np.ndarray
+    window: tuple
+    statistics: dict
+
+
+def evaluated_spans(design: CatenaryDesign, spans=None) -> tuple[int, int]:
+    """First and last evaluated span (1-based, inclusive): ``spans``, or by default the
+    two central spans of four or more, else the last (the first holds the start)."""
+    if spans is None:
+        n = design.spans
+        return (n // 2, n // 2 + 1) if n >= 4 else (n, n)
+    a, b = (int(v) for v in spans)
+    if not 1 <= a <= b <= design.spans:
+        raise ModelError(f"evaluated spans must be 1 <= first <= last <= {design.spans}, got {spans!r}")
+    return a, b
+
+
+def analyse_pantograph_run(results, design: CatenaryDesign, *, speed_kmh: float, start: float, spans=None,
+                           cutoff: float = 20.0) -> PantographRun:
+    """The statistics of EN 50318 of a run of :func:`pantograph_catenary` (or of the
+    scenario tables): contact force of ``"pantograph.contact"`` at the outputs, the
+    pantograph at x = start + v t, the contact wire's uplift at the poles of the
+    evaluated spans. The window ends at least 3 / ``cutoff`` seconds of travel before
+    the run does (the zero-phase filter's end transient)."""
+    first, last = evaluated_spans(design, spans)
+    L = design.span_length
+    t = np.asarray(results.t)
+    v = speed_kmh / 3.6
+    x = float(start) + v * t
+    window = ((first - 1) * L, min(last * L, float(x[-1]) - 3.0 * v / cutoff))
+    force = np.asarray(results.contact(f"{PANTOGRAPH}.contact")[:, 0])
+    system = results.system
+    eq = design_equilibrium(design)
+    poles = eq.pole_nodes[first - 1:last + 1]
+    iy = system.beam_offset(system.beam_names.index("catenary.contact")) + 4 * np.asarray(poles) + 1
+    q = np.asarray(results.q)
+    uplift = q[:, iy] - q[:1, iy]
+    stats = contact_statistics(t, x, force, window=window, cutoff=cutoff, uplift=uplift.max(),
+                               speed_kmh=float(speed_kmh), spans_evaluated=[first, last])
+    filtered = stats.pop("filtered")
+    return PantographRun(results, t, x, force, filtered, uplift, window, stats)
+
+
+def run_pantograph_catenary(catenary: CatenaryDesign = CatenaryDesign(),
+                            pantograph: PantographDesign = PantographDesign(), *, speed_kmh: float,
+                            dt: float = 1e-3, output_dt: float | None = None, spans=None,
+                            cutoff: float = 20.0, solver="generalized-alpha",
+                            pad_to: int | None = None, t_end: float | None = None,
+                            chunks: int | None = None) -> PantographRun:
+    """Run a pantograph along a catenary at ``speed_kmh`` and compute the statistics
+    of EN 50318 over the evaluated ``spans`` (:func:`evaluated_spans`,
+    :func:`analyse_pantograph_run`): from the static equilibrium at the start
+    (:func:`moving_equilibrium`) until one span past the evaluated ones (the filter's
+    margin) or half the first dropper distance before the last pole (``t_end``: an
+    earlier end). ``pad_to``: element slots of both wires; with it, equal ``t_end``,
+    ``output_dt = dt`` and ``chunks`` in proportion to the step count, runs of
+    different meshes and steps share one compiled program."""
+    from ..simulation import simulate
+    if not (isinstance(speed_kmh, (int, float)) and 0 < speed_kmh <= 600):
+        raise ModelError(f"speed_kmh must be a number in (0, 600] km/h, got {speed_kmh!r}")
+    _, last = evaluated_spans(catenary, spans)
+    v = speed_kmh / 3.6
+    if not 0 < cutoff:
+        raise ModelError(f"cutoff must be a frequency > 0 Hz, got {cutoff!r}")
+    model, _ = pantograph_catenary(catenary, pantograph, speed=v)
+    system, guess = model.build(assemble=False, pad_to=pad_to)
+    state, _ = moving_equilibrium(system, guess)
+    x0 = float(state.q[system.body_offset(0)])
+    x_end = min(last * catenary.span_length + max(catenary.span_length, 3.0 * v / cutoff),
+                catenary.length - 0.5 * catenary.droppers[0])
+    span = (x_end - x0) / v if t_end is None else min(float(t_end), (x_end - x0) / v)
+    res = simulate(system, state, t_end=span, dt=dt, output_dt=output_dt or dt, solver=solver, progress=None,
+                   chunks=chunks)
+    return analyse_pantograph_run(res, catenary, speed_kmh=speed_kmh, start=x0, spans=spans, cutoff=cutoff)
+
+
+#: EN 50318:2002 acceptance ranges of the reference model's statistics, by speed
+#: [km/h]: (low, high) [N or mm], and no loss of contact. Sources (secondary): Wang et
+#: al., "An Extended Habedank's Equation-Based EMTP Model of Pantograph Arcing …",
+#: IEEE, Table III; github.com/ChandraguptSharma07/faraway backend/sim/validate.py
+#: (identical values; docs/pantograph-catenary.md).
+EN50318_2002_RANGES = {
+    250: dict(mean_N=(110, 120), std_N=(26, 31), stat_max_N=(190, 210), stat_min_N=(20, 40),
+              max_N=(175, 210), min_N=(50, 75), uplift_support_mm=(48, 55), contact_loss_pct=(0, 0)),
+    300: dict(mean_N=(110, 120), std_N=(32, 40), stat_max_N=(210, 230), stat_min_N=(-5, 20),
+              max_N=(190, 225), min_N=(30, 55), uplift_support_mm=(55, 65), contact_loss_pct=(0, 0)),
+}
+
+
+def against_ranges(statistics: dict) -> list[dict] | None:
+    """Each statistic against the EN 50318:2002 range at its speed (250 or 300 km/h;
+    None at other speeds): rows {key, value, low, high, inside}."""
+    ranges = EN50318_2002_RANGES.get(int(round(statistics["speed_kmh"])))
+    if ranges is None or abs(statistics["speed_kmh"] - round(statistics["speed_kmh"])) > 1e-9:
+        return None
+    return [dict(key=k, value=statistics[k], low=lo, high=hi, inside=bool(lo <= statistics[k] <= hi))
+            for k, (lo, hi) in ranges.items()]

@@ -132,6 +132,26 @@ def initial_nodes(beam: S.BeamSpec, mesh: _mesh.BeamMesh, length: float):
     return nodes, vel
 
 
+def pantograph_start(spec: S.ScenarioSpec) -> float:
+    """x of the pantograph at t = 0 [m]: ``pantograph.start`` or a tenth of the first
+    dropper's distance from the first pole."""
+    p = spec.pantograph
+    return 0.1 * float(spec.catenary.droppers[0]) if p.start is None else float(p.start)
+
+
+def pantograph_run_time(spec: S.ScenarioSpec) -> float:
+    """Time [s] for the pantograph to reach one span (at least 3 / cutoff seconds of
+    travel) past the evaluated spans, or half the first dropper distance before the
+    line's end."""
+    from ..models.catenary import evaluated_spans
+    design = spec.catenary.design()
+    _, last = evaluated_spans(design, spec.pantograph.spans)
+    v = spec.pantograph.speed_kmh / 3.6
+    x_end = min(last * design.span_length + max(design.span_length, 3.0 * v / spec.pantograph.cutoff),
+                design.length - 0.5 * design.droppers[0])
+    return (x_end - pantograph_start(spec)) / v
+
+
 def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
     """The :class:`Model` of a checked scenario (host work plus small eager JAX ops
     to place bodies on beams; nothing is compiled for the system)."""
@@ -183,6 +203,16 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
                                      0.0 if c.speed is None else c.speed, c.profile)
             m.lumped_chain(name, base=c.base, heights=c.heights, masses=c.masses, stiffness=c.stiffness,
                            damping=c.damping, forces=c.forces, path=path, gravity=c.gravity)
+
+    if spec.catenary is not None:
+        from ..models.catenary import PANTOGRAPH, add_catenary, add_pantograph
+        with _located(file, ("catenary",)):
+            names = add_catenary(m, spec.catenary.design())
+        if spec.pantograph is not None:
+            p = spec.pantograph
+            with _located(file, ("pantograph",)):
+                add_pantograph(m, names, p.design(), start=pantograph_start(spec), speed=p.speed_kmh / 3.6,
+                               name=PANTOGRAPH)
 
     for name, j in spec.joints.items():
         with _located(file, ("joints", name)):

@@ -607,8 +607,43 @@ class Checker:
             self.beam(path + ("beam",), p.beam)
             self.arc_length(path + ("s",), p.beam, p.s)
 
+    def catenary(self):
+        """The catenary and pantograph tables: consistent with each other and with the
+        builder's own checks (dropper positions, one value per pantograph mass)."""
+        from ..errors import ModelError
+        cat, pan = self.spec.catenary, self.spec.pantograph
+        if pan is not None and cat is None:
+            raise Invalid(("pantograph",), "a pantograph needs a catenary table", "a [catenary] table")
+        if cat is None:
+            return
+        if self.spec.initial.mode != "static":
+            raise Invalid(("initial", "mode"), f'"{self.spec.initial.mode}" with a catenary',
+                          '"static" (a catenary starts in its static equilibrium)')
+        clash = {"catenary.contact", "catenary.messenger"} & set(self.spec.beams)
+        if clash:
+            raise Invalid(("beams", sorted(clash)[0]), "the catenary makes this beam", "another name")
+        try:
+            design = cat.design()
+            design.check()
+        except ModelError as e:
+            raise Invalid(("catenary",), str(e).removeprefix("catenary "), "see docs/pantograph-catenary.md") from None
+        if pan is None:
+            return
+        try:
+            pan.design().check()
+        except ModelError as e:
+            raise Invalid(("pantograph",), str(e).removeprefix("pantograph "), "see docs/pantograph-catenary.md") \
+                from None
+        if pan.start is not None and not pan.start < design.length:
+            raise Invalid(("pantograph", "start"), f"{pan.start:g} m is past the line's end {design.length:g} m",
+                          f"a position in (0, {design.length:g}) m")
+        if pan.spans is not None and not (len(pan.spans) == 2 and 1 <= pan.spans[0] <= pan.spans[1] <= design.spans):
+            raise Invalid(("pantograph", "spans"), f"{list(pan.spans)}",
+                          f"[first, last] with 1 <= first <= last <= {design.spans}")
+
     def run(self):
         self.names()
+        self.catenary()
         self.beams()
         self.bodies()
         self.moving_masses()

@@ -19,7 +19,7 @@ from ..outputs import Output
 from ..results import Results
 from ..system import State, System
 from . import schema as S
-from .build import make_model, make_outputs
+from .build import make_model, make_outputs, pantograph_run_time
 from .geometry import element_count
 
 
@@ -85,7 +85,11 @@ class Scenario:
         s = self.spec.solver
         table = getattr(s, S.SOLVER_TABLES[s.name])
         options = {k: v for k, v in table.model_dump().items() if v is not None}
-        return RunSettings(s.name, s.dt, s.t_end, self.spec.outputs.dt, options, s.drift_tolerance,
+        t_end = s.t_end
+        if self.spec.pantograph is not None:
+            # the run ends one span past the evaluated ones (solver.t_end: at most)
+            t_end = min(t_end, pantograph_run_time(self.spec))
+        return RunSettings(s.name, s.dt, t_end, self.spec.outputs.dt, options, s.drift_tolerance,
                            s.locate_crossings)
 
     @property
@@ -121,9 +125,17 @@ class Scenario:
         ``"static"``: the static equilibrium under the loads at t = 0 with every sliding
         joint held at its s₀ (:func:`~ancf_jax.model.build_in_equilibrium`), with the given
         velocities and rates (default at rest) projected onto the joints of the returned
-        system, which keeps the holds of joints with ``hold = true`` only.
+        system, which keeps the holds of joints with ``hold = true`` only. With a
+        catenary: its static equilibrium at t = 0 by the structured Newton solve
+        (:func:`~ancf_jax.models.catenary.moving_equilibrium`).
         """
         model = self.model()
+        if self.spec.catenary is not None:
+            # structured statics from the design state; beams at rest, bodies as driven
+            from ..models.catenary import moving_equilibrium
+            system, guess = model.build(pad_to=pad_to, assemble=False)
+            state, _ = moving_equilibrium(system, guess, load_steps=self.statics.load_steps)
+            return system, state
         if self.initial_mode == "given":
             return model.build(pad_to=pad_to)
         system, state, _ = build_in_equilibrium(model, load_steps=self.statics.load_steps,

@@ -26,6 +26,7 @@ from ..integrate import DEFAULT_DT, RunOptions
 from ..integrators.diffrax_solvers import DiffraxSolver
 from ..integrators.generalized_alpha import GeneralizedAlpha
 from ..integrators.explicit import RK4
+from ..models.catenary import CatenaryDesign, PantographDesign, Wire
 from ..newton import ModifiedNewton
 from ..simulation import SOLVERS
 from .types import Nodes4, Numbers, Points2, Quadrature, Side, TimeFunction, Vec2
@@ -487,6 +488,101 @@ class ChainSpec(Table):
     gravity: bool = key(True, doc="whether gravity acts on the masses")
 
 
+# ----------------------------------------------------------------------------- catenary, pantograph
+_CAT, _PAN = CatenaryDesign(), PantographDesign()
+
+
+class WireSpec(Table):
+    """A pre-tensioned wire of a catenary."""
+
+    tension: float = key(unit="N", gt=0.0, allow_inf_nan=False, doc="horizontal tension H of the design state")
+    mass_per_length: float = key(unit="kg/m", gt=0.0, allow_inf_nan=False, doc="ρA")
+    axial_stiffness: float = key(unit="N", gt=0.0, allow_inf_nan=False, doc="EA")
+    bending_stiffness: float = key(unit="N·m²", gt=0.0, allow_inf_nan=False, doc="EI")
+
+
+def _wire(w) -> WireSpec:
+    return WireSpec(**dataclasses.asdict(w))
+
+
+class CatenarySpec(Table):
+    """A simple railway catenary along +x from x = 0 (beams catenary.contact and
+    catenary.messenger, droppers catenary.dropper<k>; see docs/pantograph-catenary.md),
+    started in its design equilibrium and solved statically at t = 0
+    (initial.mode = "static"). Defaults: the model data of the shipped
+    pantograph_catenary scenario."""
+
+    spans: int = key(_CAT.spans, ge=1, le=100, doc="number of equal spans")
+    span_length: float = key(_CAT.span_length, unit="m", gt=0.0, allow_inf_nan=False, doc="distance between poles")
+    height: float = key(_CAT.height, unit="m", gt=0.0, allow_inf_nan=False, doc="contact-wire height at the poles")
+    encumbrance: float = key(_CAT.encumbrance, unit="m", gt=0.0, allow_inf_nan=False,
+                             doc="messenger height above the contact wire at the poles")
+    presag: float = key(_CAT.presag, unit="m", ge=0.0, allow_inf_nan=False,
+                        doc="contact-wire sag at mid-span (parabola through the droppers)")
+    droppers: Numbers = key(_CAT.droppers, unit="m", doc="dropper positions in a span from its first pole, "
+                                                         "increasing, inside the span")
+    dropper_stiffness: float = key(_CAT.dropper_stiffness, unit="N/m", gt=0.0, allow_inf_nan=False,
+                                   doc="dropper stiffness in tension (slack in compression)")
+    dropper_damping: float = key(_CAT.dropper_damping, unit="N·s/m", ge=0.0, allow_inf_nan=False,
+                                 doc="dropper damping while taut")
+    dropper_mass: float = key(_CAT.dropper_mass, unit="kg", ge=0.0, allow_inf_nan=False,
+                              doc="dropper mass, half at each end")
+    contact_clamp_mass: float = key(_CAT.contact_clamp_mass, unit="kg", ge=0.0, allow_inf_nan=False,
+                                    doc="dropper clamp on the contact wire")
+    messenger_clamp_mass: float = key(_CAT.messenger_clamp_mass, unit="kg", ge=0.0, allow_inf_nan=False,
+                                      doc="dropper clamp on the messenger")
+    contact: WireSpec = key(_wire(_CAT.contact), doc="the contact wire")
+    messenger: WireSpec = key(_wire(_CAT.messenger), doc="the messenger wire")
+    support_stiffness: float = key(_CAT.support_stiffness, unit="N/m", gt=0.0, allow_inf_nan=False,
+                                   doc="vertical stiffness of the messenger's intermediate supports")
+    steady_arm_stiffness: float = key(_CAT.steady_arm_stiffness, unit="N/m", ge=0.0, allow_inf_nan=False,
+                                      doc="vertical stiffness of a steady arm (0: none)")
+    steady_arm_mass: float = key(_CAT.steady_arm_mass, unit="kg", ge=0.0, allow_inf_nan=False,
+                                 doc="steady-arm mass on the contact wire")
+    element_length: float = key(_CAT.element_length, unit="m", gt=0.0, allow_inf_nan=False,
+                                doc="longest element of both wires")
+    alpha: float = key(_CAT.alpha, unit="1/s", ge=0.0, allow_inf_nan=False, doc="Rayleigh α of both wires")
+    beta: float = key(_CAT.beta, unit="s", ge=0.0, allow_inf_nan=False, doc="Rayleigh β of both wires")
+
+    def design(self) -> CatenaryDesign:
+        """The builder's :class:`~ancf_jax.models.catenary.CatenaryDesign`."""
+        d = self.model_dump()
+        d["droppers"] = tuple(d["droppers"])
+        d["contact"], d["messenger"] = Wire(**d["contact"]), Wire(**d["messenger"])
+        return CatenaryDesign(**d)
+
+
+class PantographSpec(Table):
+    """A lumped-mass pantograph (point masses pantograph.1 … bottom to head) running
+    under the catenary's contact wire at speed_kmh, in penalty contact with it
+    (pantograph.contact). The run ends one span past the evaluated spans (or at
+    solver.t_end if earlier); `ancf-jax run` writes statistics.json,
+    contact_force.csv and the figures."""
+
+    masses: Numbers = key(_PAN.masses, unit="kg", doc="m_i > 0 from the bottom (frame) to the head")
+    stiffness: Numbers = key(_PAN.stiffness, unit="N/m", doc="k_i >= 0 of the stage below each mass")
+    damping: Numbers = key(_PAN.damping, unit="N·s/m", doc="c_i >= 0 of the stage below each mass")
+    uplift: float = key(_PAN.uplift, unit="N", gt=0.0, allow_inf_nan=False,
+                        doc="static uplift force on the bottom mass (the masses carry no weight)")
+    contact_stiffness: float = key(_PAN.contact_stiffness, unit="N/m", gt=0.0, allow_inf_nan=False,
+                                   doc="penalty stiffness of the head-wire contact")
+    contact_damping: float = key(_PAN.contact_damping, unit="N·s/m", ge=0.0, allow_inf_nan=False,
+                                 doc="damping of the head-wire contact")
+    speed_kmh: float = key(250.0, unit="km/h", gt=0.0, le=600.0, allow_inf_nan=False, doc="train speed")
+    start: Optional[float] = key(None, unit="m", gt=0.0, allow_inf_nan=False,
+                                 doc="x of the pantograph at t = 0 (default a tenth of the first dropper's "
+                                     "distance)")
+    spans: Optional[list[int]] = key(None, doc="[first, last] evaluated span, 1-based (default the two "
+                                               "central spans of four or more, else the last)")
+    cutoff: float = key(20.0, unit="Hz", gt=0.0, allow_inf_nan=False, doc="low-pass cut-off of the statistics")
+
+    def design(self) -> PantographDesign:
+        """The builder's :class:`~ancf_jax.models.catenary.PantographDesign`."""
+        return PantographDesign(masses=tuple(self.masses), stiffness=tuple(self.stiffness),
+                                damping=tuple(self.damping), uplift=self.uplift,
+                                contact_stiffness=self.contact_stiffness, contact_damping=self.contact_damping)
+
+
 # ----------------------------------------------------------------------------- state, solvers
 class InitialSpec(Table):
     """How the initial state is obtained."""
@@ -843,6 +939,9 @@ class ScenarioSpec(Table):
                                                          "positions, by name")
     chains: dict[str, ChainSpec] = key({}, doc="vertical chains of point masses and spring-dampers "
                                                "(pantographs), by name")
+    catenary: Optional[CatenarySpec] = key(None, doc="a railway catenary (beams catenary.contact and "
+                                                     "catenary.messenger)")
+    pantograph: Optional[PantographSpec] = key(None, doc="a pantograph running under the catenary")
     joints: dict[str, Joint] = key({}, doc="joints by name")
     loads: dict[str, Load] = key({}, doc="applied loads and force elements by name")
     initial: InitialSpec = key(InitialSpec(), doc="initial state")

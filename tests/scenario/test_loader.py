@@ -7,7 +7,8 @@ from ancf_jax.scenario.loader import parse_override
 
 from .conftest import BASE, write
 
-SHIPPED = ["cable_car", "cantilever_tip_load", "flexible_pendulum", "hanging_chain", "hauled_cabin", "m1", "m2"]
+SHIPPED = ["cable_car", "cantilever_tip_load", "flexible_pendulum", "hanging_chain", "hauled_cabin", "m1", "m2",
+           "pantograph_catenary"]
 
 
 def test_shipped_names():

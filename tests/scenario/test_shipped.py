@@ -35,7 +35,12 @@ def short(name, steps=5):
     return load_scenario(name, [f"solver.t_end={steps * dt!r}", f"outputs.dt={dt!r}"])
 
 
-@pytest.mark.parametrize("name", shipped_scenarios())
+#: run elsewhere: the full pantograph_catenary (2 × 1200 elements) is a benchmark;
+#: tests/test_catenary.py runs it reduced to three short spans through the same path
+ROUND_TRIP = [n for n in shipped_scenarios() if n != "pantograph_catenary"]
+
+
+@pytest.mark.parametrize("name", ROUND_TRIP)
 def test_round_trip_validates_builds_and_runs(name):
     sc = short(name)
     results = sc.simulate(progress=False)

@@ -1,0 +1,207 @@
+"""Pantograph–catenary (issue 21) against independent answers.
+
+* The design equilibrium by hand (:func:`~ancf_jax.models.catenary.design_equilibrium`:
+  elastic catenaries between key points plus the bending boundary layers of the point
+  forces) against its own global balance (reactions = weights, exactly), and against
+  the static solve of the assembled ANCF model: dropper forces and wire heights agree
+  to the mesh error, which falls at least as h² (measured ~h⁴).
+* The builder's contact wire alone, pinned over one span, under a constant force
+  moving at 250 km/h: the deflection under the load against the beam's modal series.
+* A small two-span catenary with the pantograph: the filtered contact force and its
+  statistics against the run of itself with half the elements and half the step,
+  within what the convergence study measured.
+
+Programs are shared: the static solves and the runs pad both wires to one element count.
+"""
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from ancf_jax.forces import AbstractOneSidedSpringDamper
+from ancf_jax.model import Model
+from ancf_jax.models.catenary import (G, WIRE_FORMULATION, CatenaryDesign, PantographDesign, contact_statistics,
+                                      design_equilibrium, moving_equilibrium, pantograph_catenary,
+                                      run_pantograph_catenary)
+
+#: three short spans with the standard wires (the spans shortened for speed): the middle one is evaluated, the last is the filter's margin
+RUN = dict(spans=3, span_length=10.0, droppers=(2.0, 5.0, 8.0))
+
+
+def test_design_equilibrium_balances_the_weights():
+    """Vertical reactions (messenger supports, contact-wire ends) equal the weight of
+    the wires (unstretched lengths × ρA g), clamps and droppers: to 1e-5 (the
+    boundary layers shorten the wires by ~2 mm over 600 m, which the strings' weight
+    does not see; 2e-6 of it); the droppers are taut and longer at the poles than at
+    mid-span (the messenger sags)."""
+    d = CatenaryDesign()
+    eq = design_equilibrium(d)
+    weight = G * (d.contact.mass_per_length * eq.contact_rest.sum() + d.messenger.mass_per_length
+                  * eq.messenger_rest.sum() + len(eq.dropper_force) * (
+                      d.dropper_mass + d.contact_clamp_mass + d.messenger_clamp_mass))
+    reactions = eq.support_force.sum() + eq.contact_end_force.sum()
+    assert abs(reactions - weight) < 1e-5 * weight
+    assert np.all(eq.dropper_force > 0)
+    mid = len(d.droppers) // 2
+    assert eq.dropper_length[0] > eq.dropper_length[mid] < eq.dropper_length[len(d.droppers) - 1]
+    # the wires pass through their design heights: messenger at the poles (less the
+    # rounding of the support, F λ / 2H), contact wire at the droppers (less its rounding)
+    lam = np.sqrt(d.messenger.bending_stiffness / d.messenger.tension)
+    top = d.height + d.encumbrance - eq.support_force[1:-1] * lam / (2 * d.messenger.tension)
+    np.testing.assert_allclose(eq.messenger_nodes[eq.pole_nodes[1:-1], 1], top, atol=1e-9)
+
+
+def static_dropper_errors(element_length):
+    """Largest relative dropper-force error and height change [m] of the static solve
+    from the design state (the run's catenary and program, the pantograph's uplift
+    made negligible)."""
+    design = CatenaryDesign(element_length=element_length, alpha=0.06, beta=7.6e-5, **RUN)
+    m, names = pantograph_catenary(design, PantographDesign(uplift=1e-3), speed=250 / 3.6)
+    system, guess = m.build(assemble=False, pad_to=60)
+    state, _ = moving_equilibrium(system, guess)
+    q = state.q
+    tension = np.array([float(f.tension(system, q, jnp.zeros_like(q))) for f in system.forces
+                        if isinstance(f, AbstractOneSidedSpringDamper)])
+    dy = max(float(jnp.max(jnp.abs(system.beam_nodes(q - guess.q, b)[:, 1]))) for b in range(2))
+    return np.max(np.abs(tension / names.design.dropper_force - 1)), dy
+
+
+def test_static_dropper_forces_match_the_hand_equilibrium():
+    """The static solve of the assembled model (bending, extensible wires, tension-only
+    droppers, support springs) from the design state moves it by the mesh error only:
+    dropper forces and heights converge to the hand values (measured: 2.0 %, 0.53 %,
+    0.079 % and 0.84, 0.23, 0.04 mm at 1, 0.5, 0.25 m elements; 5e-5 and 0.01 mm at
+    0.125 m on 60 m spans)."""
+    (f1, y1), (f2, y2) = static_dropper_errors(1.0), static_dropper_errors(0.5)
+    assert f2 < 1e-2 and y2 < 5e-4, (f2, y2)
+    assert f1 / f2 > 3 and y1 / y2 > 3, (f1, f2, y1, y2)
+
+
+def modal_series(t, x, v, tension, mu, ei, length, force, modes=2000):
+    """Deflection of a pinned taut beam under a force entering at t = 0 at speed v."""
+    n = np.arange(1, modes + 1)[:, None]
+    k = n * np.pi / length
+    w = np.sqrt((k**2 * tension + k**4 * ei) / mu)
+    om = k * v
+    q = 2 * force * (np.sin(om * t) - om / w * np.sin(w * t)) / (mu * length * (w**2 - om**2))
+    return np.sum(q * np.sin(k * x), 0)
+
+
+def test_moving_force_on_the_builders_contact_wire():
+    """The catenary's contact wire (20 kN, 1.35 kg/m, EI 195 N·m², engineering strain,
+    stress-free length L / (1 + T / EA)) pinned over 60 m, gravity off, a 5 N force at
+    250 km/h (v = 0.57 c): deflection under the load against the (linear) modal series
+    while the load crosses the middle half. Second order in the element length: 0.12 %
+    of the peak at 0.5 m elements, 4× that at 1 m. (The load is small because the
+    series is linear: at 100 N the stretching by the 14 cm deflection raises the
+    tension by ~2 % and the deflection differs by 0.75 % at any mesh.)"""
+    from ancf_jax import mesh
+    from ancf_jax.functions import ConstantSpeed
+    from ancf_jax.model import node
+    from ancf_jax.section import Section
+    from ancf_jax.simulation import simulate
+    wire = CatenaryDesign().contact
+    length, v, force = 60.0, 250 / 3.6, 5.0
+    eps = wire.tension / wire.axial_stiffness
+    mu = wire.mass_per_length / (1 + eps)
+    errors = []
+    for n in (60, 120):
+        m = Model(gravity=(0.0, 0.0))
+        track = mesh.straight((0.0, 0.0), (1.0, 0.0), length / (1 + eps), n)
+        nodes = np.asarray(track.reference_nodes).copy()
+        nodes[:, 0] *= 1 + eps
+        nodes[:, 2] = 1 + eps
+        m.add_beam("wire", track, Section.from_stiffness(wire.axial_stiffness, wire.bending_stiffness,
+                                                         wire.mass_per_length),
+                   formulation=WIRE_FORMULATION, initial_nodes=nodes)
+        m.pin("a", node("wire", 0))
+        m.pin("b", node("wire", -1))
+        m.moving_force("P", "wire", (0.0, -force), path=ConstantSpeed(0.0, v))
+        system, state = m.build(pad_to=120)
+        res = simulate(system, state, t_end=0.75 * length / v, dt=5e-4, output_dt=5e-3, progress=False)
+        load = res.moving_load("P")
+        t = np.asarray(res.t)
+        sel = (load[:, 1] > 0.25 * length) & (load[:, 1] < 0.75 * length)
+        w = modal_series(t[sel], load[sel, 1], v, wire.tension, mu, wire.bending_stiffness, length, force)
+        errors.append(np.max(np.abs(load[sel, 2] + w)) / np.max(np.abs(w)))
+    assert errors[1] < 2e-3 and errors[0] / errors[1] > 3.0, errors
+
+
+@pytest.fixture(scope="module")
+def small_runs():
+    """The small catenary at 250 km/h: 1 m elements and 1 ms steps, and the run of
+    itself with both halved. One compiled program: both wires have 60 element slots,
+    the runs are chunks of 400 steps with outputs at every step."""
+    design = lambda el: CatenaryDesign(element_length=el, alpha=0.06, beta=7.6e-5, **RUN)  # noqa: E731
+    return {el: run_pantograph_catenary(design(el), speed_kmh=250, dt=1e-3 * el, pad_to=60, t_end=0.4,
+                                        spans=(2, 2), chunks=round(1 / el)) for el in (1.0, 0.5)}
+
+
+def test_contact_force_against_the_fine_run_of_itself(small_runs):
+    """Filtered contact force over the evaluated span against the run with half the
+    elements and half the step. The convergence study (docs/pantograph-catenary.md:
+    1, 0.5, 0.25 m against 0.125 m, steps in proportion) measured second order, RMS
+    errors 3.6, 0.93, 0.14 N of a 19.4 N standard deviation: the coarse run differs
+    from the fine one by the coarse error less the fine's, 2.7 N; its statistics by
+    < 2 N (σ by 1.3 N). The bounds leave 50 % for platforms."""
+    coarse, fine = small_runs[1.0], small_runs[0.5]
+    sel = (coarse.x >= coarse.window[0]) & (coarse.x <= coarse.window[1])
+    fine_on_coarse = np.interp(coarse.t[sel], fine.t, fine.filtered)
+    d = np.sqrt(np.mean((coarse.filtered[sel] - fine_on_coarse) ** 2))
+    assert 0.5 < d < 4.0, d  # a difference that vanished would mean the runs were not refined
+    for key in ("mean_N", "std_N", "max_N", "min_N"):
+        assert abs(coarse.statistics[key] - fine.statistics[key]) < 3.0, key
+    assert fine.statistics["contact_loss_pct"] == 0.0 == coarse.statistics["contact_loss_pct"]
+    assert coarse.statistics["spans_evaluated"] == [2, 2]
+
+
+def test_statistics_of_a_known_signal():
+    """contact_statistics on a sampled 5 Hz + 60 Hz signal: the 20 Hz filter removes
+    the 60 Hz part (zero phase), mean and σ are those of the 5 Hz part, statistical
+    extremes mean ± 3σ, losses the share of samples at or below zero."""
+    t = np.arange(0, 2.0, 1e-3)
+    slow = 100 + 30 * np.sin(2 * np.pi * 5 * t)
+    f = slow + 20 * np.sin(2 * np.pi * 60 * t)
+    f[:100] = 0.0  # a loss of contact outside the window
+    stats = contact_statistics(t, 100 * t, f, window=(50.0, 150.0))
+    inner = (t >= 0.5) & (t <= 1.5)
+    assert abs(stats["mean_N"] - 100) < 0.5 and abs(stats["std_N"] - 30 / np.sqrt(2)) < 0.3
+    np.testing.assert_allclose(stats["filtered"][inner], slow[inner], atol=0.5)
+    assert stats["stat_max_N"] == pytest.approx(stats["mean_N"] + 3 * stats["std_N"])
+    assert stats["contact_loss_pct"] == 0.0
+    assert contact_statistics(t, 100 * t, f, window=(0.0, 50.0))["contact_loss_pct"] == pytest.approx(20.0, abs=0.3)
+
+
+#: the shipped scenario reduced to RUN at 0.5 m elements
+SCENARIO_RUN = ["catenary.spans=3", "catenary.span_length=10.0", "catenary.droppers=[2.0, 5.0, 8.0]",
+                "catenary.element_length=0.5", "pantograph.spans=[2, 2]"]
+
+
+def test_shipped_scenario_is_the_python_model_and_the_cli_writes_the_contract(small_runs, tmp_path):
+    """The shipped scenario's tables build the same system and initial state as the
+    Python API (reduced to the small catenary; the static solve is the program of the
+    tests above), its run ends one span past the evaluated ones, and the CLI's report
+    writes statistics.json with the contract's keys, contact_force.csv with its
+    columns, and the figures."""
+    import json
+
+    from ancf_jax.models.catenary import STATISTICS_KEYS
+    from ancf_jax.reports import report_pantograph
+    from ancf_jax.scenario import load_scenario
+    sc = load_scenario("pantograph_catenary", SCENARIO_RUN)
+    system, state = sc.build()
+    m, _ = pantograph_catenary(sc.spec.catenary.design(), sc.spec.pantograph.design(), speed=250 / 3.6)
+    ref_system, guess = m.build(assemble=False, pad_to=60)
+    ref_state, _ = moving_equilibrium(ref_system, guess)
+    assert system.beam_names == ref_system.beam_names and system.n_coordinates == ref_system.n_coordinates
+    np.testing.assert_allclose(state.q, ref_state.q, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(state.v, ref_state.v, rtol=0, atol=1e-12)
+    assert sc.solver.t_end == pytest.approx((min(2 * 10.0 + 10.4166, 30.0 - 1.0) - 0.2) / (250 / 3.6))
+    data = report_pantograph(small_runs[1.0], tmp_path)
+    stored = json.loads((tmp_path / "statistics.json").read_text())
+    assert all(k in stored for k in STATISTICS_KEYS) and stored["speed_kmh"] == 250.0 == data["speed_kmh"]
+    assert [row["key"] for row in stored["en50318_2002"]][:2] == ["mean_N", "std_N"]
+    header = (tmp_path / "contact_force.csv").read_text().splitlines()[0]
+    assert header == "t,x,contact_force_N,contact_force_filtered_N"
+    for fig in ("contact_force.png", "uplift.png", "dropper_slack.png"):
+        assert (tmp_path / fig).stat().st_size > 0
