@@ -28,7 +28,7 @@ import numpy as np
 
 from .linalg import (AbstractSaddleSolver, AutoSaddleSolver, BlockTridiagonal, SaddleFactor, SaddleMatrix,
                      factor_chain, solve_symmetric_implicit)
-from .forces import force_tangent, force_tangent_local, reaction_force_tangent
+from .forces import AbstractForceSet, force_tangent, force_tangent_local, reaction_force_tangent
 from .newton import ModifiedNewton
 from .system import System
 
@@ -239,8 +239,13 @@ def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac, load_fa
         if system.banded_forces:
             position = np.argsort(solver_permutation(system))  # q index → solver row
             for i in system.banded_forces:
-                idx, a = force_tangent_local(system.forces[i], system, q, v, t, gamma_p, load_factor)
-                chain = chain.add_local(jnp.asarray(position)[idx], a)
+                f = system.forces[i]
+                if isinstance(f, AbstractForceSet):  # one local matrix per member
+                    idx, a = f.member_tangents(system, q, v, t, gamma_p, load_factor)
+                    chain = chain.add_local_many(jnp.asarray(position)[idx], a)
+                else:
+                    idx, a = force_tangent_local(f, system, q, v, t, gamma_p, load_factor)
+                    chain = chain.add_local(jnp.asarray(position)[idx], a)
     bi = border_indices(system)
     border = jnp.diag(system.border_mass_diagonal() * beta_p)
     coupling = None

@@ -284,7 +284,8 @@ class AbstractLinearSpringDamper(AbstractForce):
         """The stage length ℓ(q) [m]."""
 
     def potential(self, system, q, t):
-        return 0.5 * self.stiffness * (self.length(system, q) - self.rest_length) ** 2
+        ell = self.length(system, q)
+        return spring_law(0, ell, jnp.zeros_like(ell), self.stiffness, self.damping, self.rest_length)[1]
 
     def applied_force(self, system, q, v, t):
         return jnp.zeros_like(q)
@@ -403,28 +404,26 @@ class AbstractOneSidedSpringDamper(AbstractKinkedForce):
         """Whether the member is taut (tension only) or closed (compression only)."""
         return self.engaged_extension(system, q) > 0.0
 
-    def _damper(self, system, q, v):
-        """The limited damper force d [N] (class docstring)."""
-        e = self.engaged_extension(system, q)
-        ell_dot = jax.jvp(lambda qq: self.length(system, qq), (q,), (v,))[1]
-        d = jnp.where(e > 0.0, jnp.maximum(self.damping * self.sense * ell_dot, -self.stiffness * e), 0.0)
-        return d
+    def _law(self, system, q, v):
+        """(member force [N], potential [J]) by :func:`spring_law`."""
+        ell, ell_dot = jax.jvp(lambda qq: self.length(system, qq), (q,), (v,))
+        return spring_law(self.sense, ell, ell_dot, self.stiffness, self.damping, self.rest_length)
 
     def tension(self, system, q, v):
         """Member force σ (k e + d) [N], positive in tension, zero while disengaged."""
-        e = self.engaged_extension(system, q)
-        return self.sense * (self.stiffness * e + self._damper(system, q, v))
+        return self._law(system, q, v)[0]
 
     def potential(self, system, q, t):
-        return 0.5 * self.stiffness * self.engaged_extension(system, q) ** 2
+        return self._law(system, q, jnp.zeros_like(q))[1]
 
     def applied_force(self, system, q, v, t):
         return jnp.zeros_like(q)
 
     def dissipative_force(self, system, q, v):
-        d = self._damper(system, q, v)
+        # the damper's part σ d of the member force, along −∂ℓ/∂q
+        d = self.tension(system, q, v) - self.tension(system, q, jnp.zeros_like(v))
         _, vjp = jax.vjp(lambda qq: self.length(system, qq), q)
-        return vjp(-self.sense * d)[0]
+        return vjp(-d)[0]
 
     def coordinates(self, system, q, t):
         return jnp.concatenate([self.a.coordinates(system, q), self.b.coordinates(system, q)])
@@ -437,8 +436,8 @@ class AbstractOneSidedSpringDamper(AbstractKinkedForce):
         * k x + c σℓ̇ [N] while x > 0, else k x: the force limit of the damper (a taut
           member retracting fast reaches zero force before x does, and stays at zero).
         """
-        x, ell_dot = jax.jvp(lambda qq: self.sense * (self.length(system, qq) - self.rest_length), (q,), (v,))
-        return jnp.stack([x, jnp.where(x > 0.0, self.stiffness * x + self.damping * ell_dot, self.stiffness * x)])
+        x, x_dot = jax.jvp(lambda qq: self.sense * (self.length(system, qq) - self.rest_length), (q,), (v,))
+        return one_sided_kinks(x, x_dot, self.stiffness, self.damping)
 
 
 class TensionOnlySpringDamper(AbstractOneSidedSpringDamper):
@@ -471,3 +470,157 @@ def kink_values(system, q, v):
 def has_kinks(system) -> bool:
     """Whether ``system`` has force elements with kinks (static)."""
     return any(isinstance(f, AbstractKinkedForce) for f in system.forces)
+
+
+# ---------------------------------------------------------------------- sets of force elements
+class AbstractForceSet(AbstractForce):
+    """m force elements of one law evaluated together (vectorized over the members,
+    jax-md style): one gather of the members' coordinates, the law mapped over them,
+    one scatter-add. Each member acts on k coordinates (:meth:`member_coordinates`);
+    its Newton matrix is one local (k, k) matrix per member (:meth:`member_tangents`),
+    which :func:`ancf_jax.dae.iteration_matrix` adds into the chain where every member
+    lies in two neighbouring chain blocks (a catenary's droppers). Cost and compiled
+    size O(n + m k²), where m separate elements cost O(m n) and m traced copies.
+
+    ``names`` are the members' names (outputs: :meth:`~ancf_jax.results.Results.member`)."""
+
+    names: eqx.AbstractVar[tuple]
+
+    @abc.abstractmethod
+    def member_coordinates(self, system, q, t):
+        """Indices in q of each member's coordinates, int array (m, k)."""
+
+    @abc.abstractmethod
+    def member_tangents(self, system, q, v, t, damping_coef, load_factor=1.0):
+        """``(idx (m, k), A (m, k, k))``: per member A = −(∂Q/∂q + c_v ∂Q/∂v) over its
+        coordinates (as :func:`force_tangent` for one element)."""
+
+    def coordinates(self, system, q, t):
+        return jnp.reshape(self.member_coordinates(system, q, t), (-1,))
+
+
+def spring_law(sense, length, rate, stiffness, damping, rest_length):
+    """Member force [N] (positive in tension) and potential [J] of a linear or
+    one-sided spring-damper at length ℓ and rate ℓ̇ (the laws of :class:`SpringDamper`
+    and :class:`AbstractOneSidedSpringDamper`; ``sense`` 0: both ways, +1: tension
+    only, −1: compression only)."""
+    if sense == 0:
+        x = length - rest_length
+        return stiffness * x + damping * rate, 0.5 * stiffness * x * x
+    e = jnp.maximum(sense * (length - rest_length), 0.0)
+    d = jnp.where(e > 0.0, jnp.maximum(damping * sense * rate, -stiffness * e), 0.0)
+    return sense * (stiffness * e + d), 0.5 * stiffness * e * e
+
+
+def one_sided_kinks(x, x_dot, stiffness, damping):
+    """The kinks of a one-sided law at the signed extension x = σ(ℓ − ℓ₀) and its rate:
+    x (slack/taut) and the damper's force limit k x + c ẋ while x > 0, shape (2,)
+    (:meth:`AbstractOneSidedSpringDamper.kinks`)."""
+    return jnp.stack([x, jnp.where(x > 0.0, stiffness * x + damping * x_dot, stiffness * x)])
+
+
+class NodeSpringSet(AbstractForceSet, AbstractKinkedForce):
+    """m spring-dampers, member i between node ``node_a[i]`` of beam ``beam_a`` (or the
+    ground point ``ground[i]`` when ``beam_a`` is −1) and node ``node_b[i]`` of beam
+    ``beam_b``: linear (``sense`` 0), tension only (+1: droppers, hangers) or
+    compression only (−1), each with :func:`spring_law`. Droppers between the
+    interleaved wires of a catenary and the support springs of its poles.
+
+    Attributes:
+        names: member names (static).
+        beam_a, beam_b: beam indices (static; ``beam_a`` −1: ground points).
+        node_a, node_b: node indices, shape (m,) (data).
+        ground: ground points [m], shape (m, 2) (used when ``beam_a`` is −1).
+        stiffness, damping, rest_length: [N/m, N·s/m, m], shape (m,).
+        sense: 0, +1 or −1 (static).
+    """
+
+    name: str = eqx.field(static=True)
+    names: tuple = eqx.field(static=True)
+    beam_a: int = eqx.field(static=True)
+    beam_b: int = eqx.field(static=True)
+    node_a: jnp.ndarray
+    node_b: jnp.ndarray
+    ground: jnp.ndarray
+    stiffness: jnp.ndarray
+    damping: jnp.ndarray
+    rest_length: jnp.ndarray
+    sense: float = eqx.field(static=True, default=0.0)
+
+    def member_coordinates(self, system, q, t=0.0):
+        def node_coords(beam, node):
+            n = system.beams[beam].n_nodes
+            return system.beam_offset(beam) + 4 * jnp.mod(node, n)[:, None] + jnp.arange(4)[None, :]
+        b = node_coords(self.beam_b, self.node_b)
+        if self.beam_a < 0:
+            return b
+        return jnp.concatenate([node_coords(self.beam_a, self.node_a), b], axis=1)
+
+    def _member(self, x, xd, ground, k, c, l0):
+        """(force [N], potential [J], generalized force on the member's coordinates (k,))."""
+        def geometry(xx):
+            if self.beam_a < 0:
+                d = xx[0:2] - ground
+            else:
+                d = xx[4:6] - xx[0:2]
+            return jnp.sqrt(jnp.dot(d, d))
+        ell, ell_dot = jax.jvp(geometry, (x,), (xd,))
+        grad_ell = jax.grad(geometry)(x)
+        force, energy = spring_law(self.sense, ell, ell_dot, k, c, l0)
+        return force, energy, -force * grad_ell
+
+    def _mapped(self, system, q, v):
+        idx = self.member_coordinates(system, q)
+        return idx, jax.vmap(self._member)(q[idx], v[idx], self.ground, self.stiffness, self.damping,
+                                           self.rest_length)
+
+    def member_forces(self, system, q, v):
+        """Member forces [N] (positive in tension), shape (m,)."""
+        return self._mapped(system, q, v)[1][0]
+
+    def member_engaged(self, system, q):
+        """Taut (tension only) or closed (compression only) members (always for linear
+        ones), shape (m,) bool."""
+        idx = self.member_coordinates(system, q)
+        ell = jax.vmap(lambda x, g: jnp.sqrt(jnp.sum(((x[0:2] - g) if self.beam_a < 0 else (x[4:6] - x[0:2])) ** 2)))(
+            q[idx], self.ground)
+        return jnp.ones(ell.shape, bool) if self.sense == 0 else self.sense * (ell - self.rest_length) > 0.0
+
+    def potential(self, system, q, t):
+        _, (_, energy, _) = self._mapped(system, q, jnp.zeros_like(q))
+        return jnp.sum(energy)
+
+    def dissipative_force(self, system, q, v):
+        # the member forces less their elastic parts, on the members' coordinates
+        idx, (_, _, total) = self._mapped(system, q, v)
+        _, (_, _, elastic) = self._mapped(system, q, jnp.zeros_like(v))
+        return jnp.zeros_like(q).at[idx].add(total - elastic)
+
+    def applied_force(self, system, q, v, t):
+        return jnp.zeros_like(q)
+
+    def member_tangents(self, system, q, v, t, damping_coef, load_factor=1.0):
+        idx = self.member_coordinates(system, q)
+
+        def local(x, xd, ground, k, c, l0):
+            f = lambda d: self._member(x + d, xd + damping_coef * d, ground, k, c, l0)[2]  # noqa: E731
+            return -jax.jacfwd(f)(jnp.zeros_like(x))
+
+        return idx, jax.vmap(local)(q[idx], v[idx], self.ground, self.stiffness, self.damping, self.rest_length)
+
+    def kinks(self, system, q, v):
+        """Per one-sided member the kinks of :meth:`AbstractOneSidedSpringDamper.kinks`
+        (slack/taut and the damper's force limit), shape (2m,); none for linear ones."""
+        if self.sense == 0:
+            return jnp.zeros((0,), q.dtype)
+        idx = self.member_coordinates(system, q)
+
+        def one(x, xd, ground, k, c, l0):
+            def ext(xx):
+                d = (xx[0:2] - ground) if self.beam_a < 0 else (xx[4:6] - xx[0:2])
+                return self.sense * (jnp.sqrt(jnp.dot(d, d)) - l0)
+            e, e_dot = jax.jvp(ext, (x,), (xd,))
+            return one_sided_kinks(e, e_dot, k, c)
+
+        return jnp.reshape(jax.vmap(one)(q[idx], v[idx], self.ground, self.stiffness, self.damping,
+                                         self.rest_length), (-1,))

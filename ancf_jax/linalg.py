@@ -101,16 +101,20 @@ class BlockTridiagonal(eqx.Module):
         The block pair is found from the positions at run time; positions spread over
         more than two consecutive blocks are outside the pattern (the caller checks,
         :func:`within_two_blocks`)."""
+        return self.add_local_many(jnp.asarray(positions)[None], jnp.asarray(a)[None])
+
+    def add_local_many(self, positions, a):
+        """:meth:`add_local` for m local matrices at once: positions (m, k), a (m, k, k)."""
         n, b = self.n_blocks, self.block_size
         positions = jnp.asarray(positions)
         if n == 1:
-            w = jnp.zeros((b, b), a.dtype).at[positions[:, None], positions[None, :]].add(a)
-            return BlockTridiagonal(self.diagonal + w[None], self.lower, self.upper)
-        i0 = jnp.clip(jnp.min(positions) // b, 0, n - 2)
-        loc = positions - i0 * b
-        w = jnp.zeros((2 * b, 2 * b), a.dtype).at[loc[:, None], loc[None, :]].add(a)
-        diag = self.diagonal.at[i0].add(w[:b, :b]).at[i0 + 1].add(w[b:, b:])
-        return BlockTridiagonal(diag, self.lower.at[i0].add(w[b:, :b]), self.upper.at[i0].add(w[:b, b:]))
+            w = jax.vmap(lambda p, x: jnp.zeros((b, b), x.dtype).at[p[:, None], p[None, :]].add(x))(positions, a)
+            return BlockTridiagonal(self.diagonal + jnp.sum(w, axis=0)[None], self.lower, self.upper)
+        i0 = jnp.clip(jnp.min(positions, axis=1) // b, 0, n - 2)
+        loc = positions - i0[:, None] * b
+        w = jax.vmap(lambda p, x: jnp.zeros((2 * b, 2 * b), x.dtype).at[p[:, None], p[None, :]].add(x))(loc, a)
+        diag = self.diagonal.at[i0].add(w[:, :b, :b]).at[i0 + 1].add(w[:, b:, b:])
+        return BlockTridiagonal(diag, self.lower.at[i0].add(w[:, b:, :b]), self.upper.at[i0].add(w[:, :b, b:]))
 
     def to_dense(self):
         """The dense matrix, shape (n_blocks · block_size,) × 2 (for tests and small systems)."""

@@ -38,8 +38,8 @@ from .element.laws import check_law
 from .element.strain_energy import Formulation
 from .errors import ConstraintError, ModelError, VelocityProjectionWarning
 from .contact import AtArcLength, AtHorizontalPosition, MovingForce, UnilateralContact
-from .forces import (BeamMassLoad, BodyMassLoad, CompressionOnlySpringDamper, DirectedSpringDamper,
-                     PointForce, PointTorque,
+from .forces import (AbstractForceSet, BeamMassLoad, BodyMassLoad, CompressionOnlySpringDamper, DirectedSpringDamper,
+                     NodeSpringSet, PointForce, PointTorque,
                      SpringDamper, TensionOnlySpringDamper)
 from .linalg import AbstractChainLayout, InterleavedChain, SequentialChain, within_two_blocks
 from .mesh import BeamMesh, pad
@@ -537,6 +537,46 @@ class Model:
                                                          acts=acts)))
         return name
 
+    def spring_damper_set(self, name: str, members: dict, *, stiffness, rest_length, damping=0.0,
+                          acts: str = "both") -> str:
+        """Many spring-dampers of one law evaluated together
+        (:class:`~ancf_jax.forces.NodeSpringSet`): ``members`` maps each member's name
+        to its ends ``(a, b)``, ``a`` a node of one beam (the same for all) or a
+        ground point, ``b`` a node of one beam (the same for all). ``stiffness``,
+        ``damping`` and ``rest_length`` are one value for all or one per member;
+        ``acts`` as for :meth:`spring_damper`. The Newton matrix holds one 8 × 8 (or
+        4 × 4) block per member: with the wires interleaved, a catenary's droppers
+        stay in the block-tridiagonal chain, and a set of m members costs O(m) where
+        m separate elements are m traced copies."""
+        check_choice(f"acts of spring-damper set {name!r}", acts, ("both", "tension", "compression"))
+        if not members:
+            raise ModelError(f"spring-damper set {name!r} needs at least one member")
+        m = len(members)
+
+        def per_member(label, values, unit, check):
+            vals = np.broadcast_to(np.asarray(values, float), (m,)) if np.ndim(values) == 0 else np.asarray(
+                values, float)
+            if vals.shape != (m,):
+                raise ModelError(f"{label} of spring-damper set {name!r} must be one value or one per member "
+                                 f"({m}), got shape {vals.shape}")
+            for v in vals:
+                check(f"{label} of spring-damper set {name!r}", v, unit)
+            return vals.copy()
+
+        k = per_member("stiffness", stiffness, "N/m", check_nonnegative)
+        c = per_member("damping", damping, "N*s/m", check_nonnegative)
+        l0 = per_member("rest_length", rest_length, "m", check_nonnegative)
+        for member, ends in members.items():
+            a, b = ends
+            if a.kind not in ("node", "ground") or b.kind != "node":
+                raise ModelError(f"member {member!r} of spring-damper set {name!r} must join a beam node or a "
+                                 "ground point (a) to a beam node (b)")
+            self._claim(member, "force")
+        self._claim(name, "force")
+        self._forces.append(("spring_set", name, dict(members=dict(members), stiffness=k, damping=c,
+                                                      rest_length=l0, acts=acts)))
+        return name
+
     # ------------------------------------------------------------------ moving loads, contact
     def moving_force(self, name: str, beam: str, force, *, path, along: str = "x",
                      time_function: Callable | None = None) -> str:
@@ -809,6 +849,9 @@ class Model:
             for key in ("point", "a", "b"):
                 if key in a:
                     point(a[key], what)
+            for member, (pa, pb) in a.get("members", {}).items():
+                point(pa, f"member {member!r} of {what}")
+                point(pb, f"member {member!r} of {what}")
 
     def build(self, *, pad_to: dict | int | None = None, hold: bool | None = None,
               assemble: bool = True, tolerance: float = 1e-10,
@@ -999,6 +1042,23 @@ class Model:
                        "compression": CompressionOnlySpringDamper}[a["acts"]]
                 forces.append(law(name, pa, pb, jnp.asarray(a["stiffness"], float),
                                   jnp.asarray(a["damping"], float), jnp.asarray(l0, float)))
+            elif kind == "spring_set":
+                ends = list(a["members"].values())
+                kinds_a = {e[0].kind for e in ends}
+                beams_a = {e[0].target for e in ends if e[0].kind == "node"}
+                beams_b = {e[1].target for e in ends}
+                if len(kinds_a) != 1 or len(beams_a) > 1 or len(beams_b) != 1:
+                    raise ModelError(f"spring-damper set {name!r}: all members must join the same beam (or the "
+                                     "ground) to the same beam")
+                ground_a = kinds_a == {"ground"}
+                nodes_a = [0 if ground_a else node_index(e[0].target, e[0].value)[1] for e in ends]
+                nodes_b = [node_index(e[1].target, e[1].value)[1] for e in ends]
+                ground = np.array([e[0].value if ground_a else (0.0, 0.0) for e in ends], float)
+                forces.append(NodeSpringSet(
+                    name, tuple(a["members"]), -1 if ground_a else beam_of(next(iter(beams_a))),
+                    beam_of(next(iter(beams_b))), jnp.asarray(nodes_a), jnp.asarray(nodes_b), jnp.asarray(ground),
+                    jnp.asarray(a["stiffness"]), jnp.asarray(a["damping"]), jnp.asarray(a["rest_length"]),
+                    {"both": 0.0, "tension": 1.0, "compression": -1.0}[a["acts"]]))
             elif kind == "moving_force":
                 where = (AtHorizontalPosition if a["along"] == "x" else AtArcLength)(a["path"])
                 forces.append(MovingForce(name, beam_of(a["beam"]), where, jnp.asarray(a["force"], float),
@@ -1054,11 +1114,13 @@ def _banded(system: System, q, layout: AbstractChainLayout) -> tuple[int, ...]:
     n_chain, size = trial.chain_size, layout.block_size(len(system.beams))
     out = []
     for i, f in enumerate(system.forces):
-        idx = f.coordinates(trial, q, 0.0)
-        if idx is None:
+        # a set of force elements is banded when every member is
+        rows = f.member_coordinates(trial, q, 0.0) if isinstance(f, AbstractForceSet) else f.coordinates(trial, q, 0.0)
+        if rows is None:
             continue
-        pos = position[np.asarray(idx, int)]
-        if pos.size and pos.max() < n_chain and within_two_blocks(pos, size):
+        pos = position[np.asarray(rows, int)]
+        pos = pos if isinstance(f, AbstractForceSet) else pos[None]
+        if pos.size and pos.max() < n_chain and all(within_two_blocks(p, size) for p in pos):
             out.append(i)
     return tuple(out)
 

@@ -232,15 +232,16 @@ def pantograph_figures(run, out_dir) -> None:
     ax.legend(fontsize=8)
     _finish(fig, out / "uplift.png")
     system = run.results.system
-    names = [f.name for f in system.forces if f.name.startswith("catenary.dropper")]
-    if names:
-        slack = np.stack([run.results.member(n)[:, 1] < 0.5 for n in names], axis=1)
-        xd = np.array([float(system.forces[[f.name for f in system.forces].index(n)].a.position(
-            system, np.asarray(run.results.q[0]))[0]) for n in names])
+    sets = [f for f in system.forces if f.name == "catenary.droppers"]
+    if sets:
+        drop = sets[0]
+        slack = run.results.members(drop.name)[:, :, 1] < 0.5
+        q0 = np.asarray(run.results.q[0])
+        xd = q0[np.asarray(drop.member_coordinates(system, q0))[:, 0]]
         fig, ax = plt.subplots(figsize=(9, 3.5))
         ii, jj = np.nonzero(slack)
         ax.scatter(run.x[ii], xd[jj], s=2, color="C3")
         ax.set_xlabel("pantograph position x [m]")
         ax.set_ylabel("slack dropper at x [m]")
-        ax.set_title(f"slack droppers ({int(slack.any(axis=0).sum())} of {len(names)} go slack)")
+        ax.set_title(f"slack droppers ({int(slack.any(axis=0).sum())} of {len(drop.names)} go slack)")
         _finish(fig, out / "dropper_slack.png")

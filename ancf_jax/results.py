@@ -20,7 +20,7 @@ import numpy as np
 
 from .errors import ModelError
 from .contact import MovingForce, UnilateralContact
-from .forces import AbstractOneSidedSpringDamper, SpringDamper
+from .forces import AbstractOneSidedSpringDamper, NodeSpringSet, SpringDamper
 from .joints import (Clamp, Coincident, FixedJoint, PathCoordinate, PrescribedCoordinate, PrescribedPoint,
                      SlidingJoint)
 from .sliding import AbstractSlidingDrive
@@ -56,6 +56,15 @@ def _member_history(system: System, force, q, v):
             return jnp.stack([force.stiffness * (ell - force.rest_length) + force.damping * ell_dot,
                               jnp.ones(())])
         return jnp.stack([force.tension(system, qq, vv), force.engaged(system, qq).astype(qq.dtype)])
+    return jax.vmap(one)(q, v)
+
+
+@eqx.filter_jit
+def _set_history(system: System, force, q, v):
+    """(force [N], engaged 0/1) of every member of a spring-damper set per row, (N, m, 2)."""
+    def one(qq, vv):
+        return jnp.stack([force.member_forces(system, qq, vv),
+                          force.member_engaged(system, qq).astype(qq.dtype)], axis=-1)
     return jax.vmap(one)(q, v)
 
 
@@ -305,11 +314,23 @@ class Results:
     def member(self, name: str) -> np.ndarray:
         """Member force [N] (positive in tension) and engaged state (1: taut or closed,
         0: slack or open; linear spring-dampers are always 1) of a spring-damper,
-        shape (N, 2)."""
+        shape (N, 2). ``name`` may be a member of a set
+        (:class:`~ancf_jax.forces.NodeSpringSet`), e.g. a catenary's dropper."""
+        for f in self.system.forces:
+            if isinstance(f, NodeSpringSet) and name in f.names:
+                return self.members(f.name)[:, f.names.index(name)]
         f = self.force_element(name)
         if not isinstance(f, (SpringDamper, AbstractOneSidedSpringDamper)):
             raise ModelError(f"force element {name!r} is not a spring-damper")
         return np.asarray(_member_history(self.system, f, jnp.asarray(self.q), jnp.asarray(self.v)))
+
+    def members(self, name: str) -> np.ndarray:
+        """Member forces [N] and engaged states of every member of the spring-damper
+        set ``name`` (:class:`~ancf_jax.forces.NodeSpringSet`), shape (N, m, 2)."""
+        f = self.force_element(name)
+        if not isinstance(f, NodeSpringSet):
+            raise ModelError(f"force element {name!r} is not a spring-damper set")
+        return np.asarray(_set_history(self.system, f, jnp.asarray(self.q), jnp.asarray(self.v)))
 
     def contact(self, name: str) -> np.ndarray:
         """Normal force F_n [N] (>= 0), gap g [m] (negative: penetration), engaged state

@@ -103,12 +103,10 @@ def beta_set_after_build():
     return Parameter("beta", "beta", "beam", 0).set(system, 2e-4), state
 
 
-def two_wires(layout=None):
-    """Two pinned wires one above the other joined by tension-only droppers at
-    matching arc lengths (inside elements and at a node) and a support spring: the
-    droppers and the spring enter the chain (:func:`ancf_jax.model.chain_structure`)."""
+def pinned_wires():
+    """A model of two 4 m wires of 8 elements, 1 m apart, pinned at both ends."""
     from ancf_jax import mesh
-    from ancf_jax.model import Model, beam_point, ground, node
+    from ancf_jax.model import Model, node
     from ancf_jax.section import Section
     m = Model(gravity=(0.0, -9.81))
     section = Section.from_stiffness(1e5, 10.0, 1.0)
@@ -117,6 +115,15 @@ def two_wires(layout=None):
     for b in ("contact", "messenger"):
         m.pin(f"{b}.start", node(b, 0))
         m.pin(f"{b}.end", node(b, -1))
+    return m
+
+
+def two_wires(layout=None):
+    """Two pinned wires one above the other joined by tension-only droppers at
+    matching arc lengths (inside elements and at a node) and a support spring: the
+    droppers and the spring enter the chain (:func:`ancf_jax.model.chain_structure`)."""
+    from ancf_jax.model import beam_point, ground
+    m = pinned_wires()
     for i, s in enumerate((0.75, 1.5, 2.0, 3.1)):
         m.spring_damper(f"dropper{i}", beam_point("contact", s), beam_point("messenger", s),
                         stiffness=1e3, damping=2.0, rest_length=0.99, acts="tension")
@@ -229,3 +236,43 @@ def test_user_spring_converges_as_fast_as_the_beam_alone():
     n_base = iterations_per_step(base, state)
     n_spring = iterations_per_step(with_spring, state)
     assert n_spring <= n_base + 0.25, (n_spring, n_base)
+
+
+def test_a_spring_set_is_its_members():
+    """The droppers and the support spring of two_wires as vectorized sets
+    (:class:`~ancf_jax.forces.NodeSpringSet`): generalized force, potential, kinks and
+    member forces equal those of the separate elements, and the Newton matrix (one
+    local block per member, in the interleaved chain) is the Jacobian of the residual."""
+    from ancf_jax.forces import kink_values
+    from ancf_jax.model import ground, node
+    nodes, damping = (1, 3, 4, 6), (2.0, 1.0, 0.5, 3.0)
+
+    def build(as_set):
+        m = pinned_wires()
+        ends = {f"d{i}": (node("contact", n), node("messenger", n)) for i, n in enumerate(nodes)}
+        if as_set:
+            m.spring_damper_set("droppers", ends, stiffness=1e3, damping=damping, rest_length=0.99, acts="tension")
+            m.spring_damper_set("supports", {"s": (ground(2.0, 1.5), node("messenger", 4))}, stiffness=1e3,
+                                rest_length=0.5)
+        else:
+            for (name, (a, b)), c in zip(ends.items(), damping):
+                m.spring_damper(name, a, b, stiffness=1e3, damping=c, rest_length=0.99, acts="tension")
+            m.spring_damper("s", ground(2.0, 1.5), node("messenger", 4), stiffness=1e3, rest_length=0.5)
+        return m.build()
+
+    (system, state), (separate, _) = build(True), build(False)
+    assert system.banded_forces == (0, 1)
+    q, v, lam = perturbed(system, state, 3)
+    t = 0.1
+    np.testing.assert_allclose(system.generalized_force(q, v, t), separate.generalized_force(q, v, t),
+                               rtol=0, atol=1e-12)
+    assert float(system.force_potential(q, t)) == pytest.approx(float(separate.force_potential(q, t)), rel=1e-14)
+    np.testing.assert_allclose(np.sort(kink_values(system, q, v)), np.sort(kink_values(separate, q, v)), atol=1e-12)
+    tensions = system.forces[0].member_forces(system, q, v)
+    np.testing.assert_allclose(tensions, [float(f.tension(separate, q, v)) for f in separate.forces[:4]], atol=1e-10)
+    jac = system.constraint_jacobian(q, t)
+    structured = eqx.filter_jit(lambda *a: dae.iteration_matrix(*a).effective_dense())(
+        system, q, v, lam, t, 3.7e5, 1.1e3, jac)
+    reference = eqx.filter_jit(residual_jacobian)(system, q, v, jnp.zeros_like(q), lam, t, 3.7e5, 1.1e3)
+    scale = jnp.max(jnp.abs(reference))
+    np.testing.assert_allclose(structured / scale, reference / scale, rtol=0, atol=1e-13)

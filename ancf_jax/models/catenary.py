@@ -478,10 +478,12 @@ def add_catenary(model, design: CatenaryDesign = CatenaryDesign(), name: str = "
     """Add a simple catenary to ``model`` in its design equilibrium (module docstring).
 
     Adds the beams ``"<name>.contact"`` and ``"<name>.messenger"``, pins
-    ``"<name>.<wire>.start|end"``, tension-only droppers ``"<name>.dropper<k>"``
-    (k = 1, 2, … along the track), clamp masses, messenger support springs
-    ``"<name>.support<k>"`` and steady arms ``"<name>.steady_arm<k>"`` at the
-    intermediate poles (k = 1 … spans − 1). The model's gravity must be (0, −9.81).
+    ``"<name>.<wire>.start|end"``, the set ``"<name>.droppers"`` of tension-only
+    droppers ``"<name>.dropper<k>"`` (k = 1, 2, … along the track,
+    :class:`~ancf_jax.forces.NodeSpringSet`), clamp masses, and at the intermediate
+    poles (k = 1 … spans − 1) the sets ``"<name>.supports"`` of messenger support
+    springs ``"<name>.support<k>"`` and ``"<name>.steady_arms"`` of steady arms
+    ``"<name>.steady_arm<k>"``. The model's gravity must be (0, −9.81).
     """
     from ..model import ground, node  # imported here: the model layer is above this one
     design.check()
@@ -502,33 +504,38 @@ def add_catenary(model, design: CatenaryDesign = CatenaryDesign(), name: str = "
         beams[wire_name] = (beam, np.concatenate([[0.0], np.cumsum(rest)]))
     contact, s_c = beams["contact"]
     messenger, s_m = beams["messenger"]
-    droppers = []
     m_c = design.contact_clamp_mass + 0.5 * design.dropper_mass
     m_m = design.messenger_clamp_mass + 0.5 * design.dropper_mass
-    for k, (i, f, length) in enumerate(zip(eq.dropper_nodes, eq.dropper_force, eq.dropper_length)):
-        d = model.spring_damper(f"{name}.dropper{k + 1}", node(contact, int(i)), node(messenger, int(i)),
-                                stiffness=design.dropper_stiffness, damping=design.dropper_damping,
-                                rest_length=float(length - f / design.dropper_stiffness), acts="tension")
-        droppers.append(d)
+    droppers = tuple(f"{name}.dropper{k + 1}" for k in range(len(eq.dropper_nodes)))
+    model.spring_damper_set(
+        f"{name}.droppers", {d: (node(contact, int(i)), node(messenger, int(i)))
+                             for d, i in zip(droppers, eq.dropper_nodes)},
+        stiffness=design.dropper_stiffness, damping=design.dropper_damping,
+        rest_length=eq.dropper_length - eq.dropper_force / design.dropper_stiffness, acts="tension")
+    for d, i in zip(droppers, eq.dropper_nodes):
         if m_c > 0:
             model.attached_mass(f"{d}.contact_clamp", contact, float(s_c[i]), m_c)
         if m_m > 0:
             model.attached_mass(f"{d}.messenger_clamp", messenger, float(s_m[i]), m_m)
-    supports, arms = [], []
-    for k, (i, r) in enumerate(zip(eq.pole_nodes[1:-1], eq.support_force[1:-1])):
-        # a vertical spring from 1 m above the messenger, stretched to carry the reaction
-        xk, ym = float(eq.x[i]), float(eq.messenger_nodes[i, 1])
-        supports.append(model.spring_damper(
-            f"{name}.support{k + 1}", ground(xk, ym + 1.0), node(messenger, int(i)),
-            stiffness=design.support_stiffness, rest_length=1.0 - float(r) / design.support_stiffness))
-        if design.steady_arm_stiffness > 0:
-            yc = float(eq.contact_nodes[i, 1])
-            arms.append(model.spring_damper(
-                f"{name}.steady_arm{k + 1}", ground(xk, yc - 1.0), node(contact, int(i)),
-                stiffness=design.steady_arm_stiffness, rest_length=1.0))
-        if design.steady_arm_mass > 0:
+    inner = eq.pole_nodes[1:-1]
+    supports = tuple(f"{name}.support{k + 1}" for k in range(len(inner)))
+    arms = tuple(f"{name}.steady_arm{k + 1}" for k in range(len(inner))) if design.steady_arm_stiffness > 0 else ()
+    if len(inner):
+        # vertical springs from 1 m above the messenger, stretched to carry the reactions
+        model.spring_damper_set(
+            f"{name}.supports", {sname: (ground(float(eq.x[i]), float(eq.messenger_nodes[i, 1]) + 1.0),
+                                         node(messenger, int(i))) for sname, i in zip(supports, inner)},
+            stiffness=design.support_stiffness,
+            rest_length=1.0 - eq.support_force[1:-1] / design.support_stiffness)
+    if arms:
+        model.spring_damper_set(
+            f"{name}.steady_arms", {aname: (ground(float(eq.x[i]), float(eq.contact_nodes[i, 1]) - 1.0),
+                                            node(contact, int(i))) for aname, i in zip(arms, inner)},
+            stiffness=design.steady_arm_stiffness, rest_length=1.0)
+    if design.steady_arm_mass > 0:
+        for k, i in enumerate(inner):
             model.attached_mass(f"{name}.steady_arm{k + 1}.mass", contact, float(s_c[i]), design.steady_arm_mass)
-    return CatenaryNames(contact, messenger, tuple(droppers), tuple(supports), tuple(arms), eq)
+    return CatenaryNames(contact, messenger, droppers, supports, arms, eq)
 
 
 def contact_wire_height(eq: DesignEquilibrium, x):

@@ -1,0 +1,175 @@
+"""Pantograph–catenary at full scale (issue 21): statistics, convergence, cost.
+
+1. ``scaling``: cost per step of the shipped model's structure at 2, 4 and 10 spans
+   (480, 960 and 2,400 elements at 0.5 m), 200 steps each after compilation: the
+   exponent of a power-law fit and the marginal cost per element, and the compile
+   times (statics, time stepping).
+2. ``convergence``: the reduced catenary of tests/test_catenary.py (3 spans of 10 m,
+   span 2 evaluated) under joint refinement of element length and step (1, 0.5,
+   0.25 m against 0.125 m; steps 1 ms × element length / 1 m), and the shipped
+   model's setting (0.5 m, 1 ms) against the same reference.
+3. ``full``: the shipped scenario (10 spans, 2,400 elements) at 250 and 300 km/h, its
+   statistics against the EN 50318:2002 ranges, wall time and real-time factor.
+4. ``batch``: the reduced catenary at 8 speeds (150–350 km/h) in one vmapped run
+   against 8 single runs (same program and step count).
+
+Run from the repository root: ``python -m benchmarks.pantograph_catenary [PART ...]``
+(default all; about 25 minutes on the 2-core machine); writes
+benchmarks/results/pantograph_catenary.{json,md}.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from ancf_jax.models.catenary import (CatenaryDesign, against_ranges, analyse_pantograph_run,  # noqa: E402
+                                      moving_equilibrium, pantograph_catenary, run_pantograph_catenary)
+from ancf_jax.simulation import simulate, simulate_batch  # noqa: E402
+
+from .common import table, write  # noqa: E402
+
+RUN = dict(spans=3, span_length=10.0, droppers=(2.0, 5.0, 8.0), alpha=0.06, beta=7.6e-5)
+SHIPPED = dict(alpha=0.06, beta=7.6e-5)
+
+
+def scaling() -> dict:
+    rows = []
+    for spans in (2, 4, 10):
+        m, _ = pantograph_catenary(CatenaryDesign(spans=spans, element_length=0.5, **SHIPPED), speed=250 / 3.6)
+        system, guess = m.build(assemble=False)
+        t0 = time.perf_counter()
+        state, _ = moving_equilibrium(system, guess)
+        statics_s = time.perf_counter() - t0
+        r = simulate(system, state, t_end=0.2, dt=1e-3, progress=False)
+        elements = sum(int(b.mesh.n_elements) for b in system.beams)
+        rows.append(dict(spans=spans, elements=elements, coordinates=system.n_coordinates,
+                         statics_s=statics_s, compile_s=r.compile_time_s,
+                         step_ms=1e3 * r.wall_time_s / 200, newton_per_step=float(np.sum(r.iterations)) / 200))
+        print(rows[-1], flush=True)
+    e = np.array([r["elements"] for r in rows], float)
+    c = np.array([r["step_ms"] for r in rows])
+    exponent = float(np.polyfit(np.log(e), np.log(c), 1)[0])
+    marginal = float(np.polyfit(e, c, 1)[0]) * 1e3  # µs per element-step
+    return dict(runs=rows, exponent=exponent, marginal_us_per_element=marginal)
+
+
+def convergence() -> dict:
+    levels = [(1.0, 1e-3), (0.5, 5e-4), (0.25, 2.5e-4), (0.5, 1e-3), (0.125, 1.25e-4)]
+    runs = {}
+    for el, dt in levels:
+        r = run_pantograph_catenary(CatenaryDesign(element_length=el, **RUN), speed_kmh=250, dt=dt,
+                                    output_dt=1e-3, pad_to=240, spans=(2, 2))
+        runs[(el, dt)] = r
+        print(el, dt, {k: v for k, v in r.statistics.items() if k.endswith("_N")}, flush=True)
+    ref = runs[(0.125, 1.25e-4)]
+    sel = (ref.x >= ref.window[0]) & (ref.x <= ref.window[1])
+    out = []
+    for (el, dt), r in runs.items():
+        rms = float(np.sqrt(np.mean((r.filtered[sel] - ref.filtered[sel]) ** 2)))
+        out.append(dict(element_length=el, dt=dt, rms_error_N=rms, **{k: r.statistics[k] for k in (
+            "mean_N", "std_N", "max_N", "min_N", "uplift_support_mm")}))
+    return dict(reference=dict(element_length=0.125, dt=1.25e-4), levels=out)
+
+
+def full() -> dict:
+    from ancf_jax.scenario import load_scenario
+    from ancf_jax.scenario.build import pantograph_start
+    out = []
+    for v in (250.0, 300.0):
+        sc = load_scenario("pantograph_catenary", [f"pantograph.speed_kmh={v}"])
+        t0 = time.perf_counter()
+        system, state = sc.build()
+        build_s = time.perf_counter() - t0
+        kw = sc.solver.simulate_kwargs()
+        r = simulate(system, state, **{**kw, "progress": False})
+        p = sc.spec.pantograph
+        run = analyse_pantograph_run(r, sc.spec.catenary.design(), speed_kmh=v, start=pantograph_start(sc.spec),
+                                     spans=p.spans, cutoff=p.cutoff)
+        stats = dict(run.statistics)
+        out.append(dict(statistics=stats, en50318_2002=against_ranges(stats), build_and_statics_s=build_s,
+                        compile_s=r.compile_time_s, wall_s=r.wall_time_s, simulated_s=float(r.t[-1]),
+                        real_time_factor=r.wall_time_s / float(r.t[-1]), steps=int(round(float(r.t[-1]) / kw["dt"]))))
+        print(json.dumps(out[-1], default=str)[:600], flush=True)
+    return dict(runs=out)
+
+
+def batch() -> dict:
+    speeds = np.linspace(150, 350, 8)
+    systems, states = [], []
+    for v in speeds:
+        m, _ = pantograph_catenary(CatenaryDesign(element_length=0.5, **RUN), speed=float(v) / 3.6)
+        s, g = m.build(assemble=False)
+        st, _ = moving_equilibrium(s, g)
+        systems.append(s)
+        states.append(st)
+    t_end = 0.3
+    res = simulate_batch(systems, states, t_end=t_end, dt=1e-3, progress=False)
+    batch_wall = res[0].info.get("batch_wall_time_s", sum(r.wall_time_s for r in res))
+    singles = [simulate(s, st, t_end=t_end, dt=1e-3, progress=False) for s, st in zip(systems, states)]
+    single_wall = sum(r.wall_time_s for r in singles)
+    agree = max(float(np.max(np.abs(np.asarray(a.q) - np.asarray(b.q)))) for a, b in zip(res, singles))
+    return dict(speeds_kmh=speeds.tolist(), steps=int(t_end / 1e-3), batch_wall_s=batch_wall,
+                singles_wall_s=single_wall, batch_compile_s=res[0].compile_time_s,
+                single_compile_s=singles[0].compile_time_s, max_q_difference_m=agree)
+
+
+PARTS = dict(scaling=scaling, convergence=convergence, full=full, batch=batch)
+
+
+def markdown(data: dict) -> str:
+    md = []
+    if "scaling" in data:
+        s = data["scaling"]
+        md.append("Cost per step (generalized-α, h = 1 ms, 0.5 m elements, both wires interleaved):\n\n" + table(
+            ["spans", "elements", "coordinates", "statics [s]", "compile [s]", "step [ms]", "Newton/step"],
+            [[r["spans"], r["elements"], r["coordinates"], f"{r['statics_s']:.1f}", f"{r['compile_s']:.1f}",
+              f"{r['step_ms']:.2f}", f"{r['newton_per_step']:.2f}"] for r in s["runs"]])
+            + f"\n\nexponent {s['exponent']:.2f}, marginal {s['marginal_us_per_element']:.1f} µs per element-step")
+    if "convergence" in data:
+        md.append("Convergence (3 spans of 10 m, span 2, against 0.125 m / 0.125 ms):\n\n" + table(
+            ["element [m]", "h [s]", "RMS error [N]", "mean [N]", "σ [N]", "max [N]", "min [N]", "uplift [mm]"],
+            [[r["element_length"], r["dt"], f"{r['rms_error_N']:.3f}", f"{r['mean_N']:.2f}", f"{r['std_N']:.2f}",
+              f"{r['max_N']:.2f}", f"{r['min_N']:.2f}", f"{r['uplift_support_mm']:.2f}"]
+             for r in data["convergence"]["levels"]]))
+    if "full" in data:
+        rows = []
+        for r in data["full"]["runs"]:
+            s = r["statistics"]
+            for row in r["en50318_2002"] or []:
+                rows.append([s["speed_kmh"], row["key"], f"{row['value']:.2f}", f"{row['low']}–{row['high']}",
+                             "inside" if row["inside"] else "outside"])
+        md.append("Shipped model (10 spans, spans 5–6) against EN 50318:2002:\n\n"
+                  + table(["km/h", "statistic", "value", "range", ""], rows) + "\n\n" + "\n".join(
+                      f"- {r['statistics']['speed_kmh']:g} km/h: {r['steps']} steps, wall {r['wall_s']:.0f} s, "
+                      f"real-time factor {r['real_time_factor']:.1f}, compile {r['compile_s']:.0f} s, build + "
+                      f"statics {r['build_and_statics_s']:.0f} s" for r in data["full"]["runs"]))
+    if "batch" in data:
+        b = data["batch"]
+        md.append(f"Batch of 8 speeds (reduced catenary, {b['steps']} steps): vmapped {b['batch_wall_s']:.1f} s "
+                  f"against 8 single runs {b['singles_wall_s']:.1f} s (compile {b['batch_compile_s']:.0f} s and "
+                  f"{b['single_compile_s']:.0f} s); largest difference of q {b['max_q_difference_m']:.1e} m.")
+    return "\n\n".join(md)
+
+
+def main(argv=None) -> None:
+    parts = (argv if argv is not None else sys.argv[1:]) or list(PARTS)
+    path = Path(__file__).parent / "results" / "pantograph_catenary.json"
+    data = json.loads(path.read_text()) if path.exists() else {}
+    data.pop("stamp", None)
+    for p in parts:
+        data[p] = PARTS[p]()
+    md = markdown(data)
+    out = write("pantograph_catenary", data, md)
+    print(md)
+    print(f"written {out}")
+
+
+if __name__ == "__main__":
+    main()
