@@ -64,7 +64,7 @@ def saddle_matrix(system: System, chain: BlockTridiagonal | None, border_block, 
     """Bordered matrix [[K, Φ_qᵀ], [Φ_q, 0]] for a chain block K_cc (block tridiagonal),
     a border block K_bb (dense, (n_b, n_b)) and an optional symmetric chain–border
     coupling K_cb (dense, (n_c, n_b))."""
-    c = system.chain_indices()
+    c = system.chain_selector()
     bi = border_indices(system)
     jc, jb = jac[:, c], jac[:, bi]
     n_c, n_bc, m = system.chain_size, len(bi), jac.shape[0]
@@ -255,7 +255,7 @@ def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac, load_fa
             return jax.grad(lambda z: jnp.dot(lam, system.constraint(z, t)))(qq)
         h = jax.jacfwd(grad_lam_phi)(q[bi])  # (n, n_b): ∂²(λ·Φ)/∂q ∂q_border
         border = border + h[bi]
-        coupling = h[system.chain_indices()]
+        coupling = h[system.chain_selector()]
     matrix = saddle_matrix(system, chain, border, jac, coupling)
     others = [f for i, f in enumerate(system.forces) if i not in system.banded_forces]
     if others:

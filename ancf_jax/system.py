@@ -126,6 +126,11 @@ class System(eqx.Module):
         order = self.layout.order(tuple(b.n_coordinates for b in self.beams))
         return (3 * self.n_bodies + order).astype(int)
 
+    def chain_selector(self):
+        """:meth:`chain_slice` where the chain order is that of q (a slice, not a
+        gather, in the compiled program), else :meth:`chain_indices`."""
+        return self.chain_slice() if isinstance(self.layout, SequentialChain) else self.chain_indices()
+
     def coordinate_labels(self) -> tuple[str, ...]:
         """One label per coordinate of q, in order, with its SI unit: ``body:NAME.x [m]``
         (x, y [m], theta [rad]), ``beam:NAME.node[i].x [m]`` (x, y [m], slope_x,
@@ -210,7 +215,7 @@ class System(eqx.Module):
         nb3 = 3 * self.n_bodies
         out = out.at[:nb3].set(self.bodies.mass_diagonal() * v[:nb3])
         if self.beams:
-            c = self.chain_indices()
+            c = self.chain_selector()
             out = out.at[c].set(self.beam_mass().matvec(v[c]))
         return out
 
