@@ -556,16 +556,15 @@ class NodeSpringSet(AbstractForceSet, AbstractKinkedForce):
             return b
         return jnp.concatenate([node_coords(self.beam_a, self.node_a), b], axis=1)
 
+    def _length(self, x, ground):
+        """Length ℓ [m] of one member from its local coordinates x (k,)."""
+        d = (x[0:2] - ground) if self.beam_a < 0 else (x[4:6] - x[0:2])
+        return jnp.sqrt(jnp.dot(d, d))
+
     def _member(self, x, xd, ground, k, c, l0):
         """(force [N], potential [J], generalized force on the member's coordinates (k,))."""
-        def geometry(xx):
-            if self.beam_a < 0:
-                d = xx[0:2] - ground
-            else:
-                d = xx[4:6] - xx[0:2]
-            return jnp.sqrt(jnp.dot(d, d))
-        ell, ell_dot = jax.jvp(geometry, (x,), (xd,))
-        grad_ell = jax.grad(geometry)(x)
+        ell, ell_dot = jax.jvp(lambda xx: self._length(xx, ground), (x,), (xd,))
+        grad_ell = jax.grad(self._length)(x, ground)
         force, energy = spring_law(self.sense, ell, ell_dot, k, c, l0)
         return force, energy, -force * grad_ell
 
@@ -582,8 +581,7 @@ class NodeSpringSet(AbstractForceSet, AbstractKinkedForce):
         """Taut (tension only) or closed (compression only) members (always for linear
         ones), shape (m,) bool."""
         idx = self.member_coordinates(system, q)
-        ell = jax.vmap(lambda x, g: jnp.sqrt(jnp.sum(((x[0:2] - g) if self.beam_a < 0 else (x[4:6] - x[0:2])) ** 2)))(
-            q[idx], self.ground)
+        ell = jax.vmap(self._length)(q[idx], self.ground)
         return jnp.ones(ell.shape, bool) if self.sense == 0 else self.sense * (ell - self.rest_length) > 0.0
 
     def potential(self, system, q, t):
@@ -616,10 +614,7 @@ class NodeSpringSet(AbstractForceSet, AbstractKinkedForce):
         idx = self.member_coordinates(system, q)
 
         def one(x, xd, ground, k, c, l0):
-            def ext(xx):
-                d = (xx[0:2] - ground) if self.beam_a < 0 else (xx[4:6] - xx[0:2])
-                return self.sense * (jnp.sqrt(jnp.dot(d, d)) - l0)
-            e, e_dot = jax.jvp(ext, (x,), (xd,))
+            e, e_dot = jax.jvp(lambda xx: self.sense * (self._length(xx, ground) - l0), (x,), (xd,))
             return one_sided_kinks(e, e_dot, k, c)
 
         return jnp.reshape(jax.vmap(one)(q[idx], v[idx], self.ground, self.stiffness, self.damping,

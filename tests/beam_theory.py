@@ -30,3 +30,17 @@ def clamped_free_frequencies(ei, rho_a, length, tip_mass=0.0, tip_inertia=0.0, c
     roots = [brentq(det, betas[i], betas[i + 1], xtol=1e-14 / length)
              for i in range(len(betas) - 1) if vals[i] * vals[i + 1] < 0]
     return np.array([b**2 * np.sqrt(ei / rho_a) for b in roots[:count]])
+
+
+def moving_load_series(t, x, v, tension, mu, ei, length, force, modes=4000):
+    """Deflection w(x, t) (along the load) of a pinned taut string or beam (tension T,
+    mass per current length μ, bending stiffness EI, current length ℓ) under a force P
+    entering at t = 0 and moving at speed v, by its modal series:
+    qₙ = 2P [sin Ωₙt − (Ωₙ/ωₙ) sin ωₙt] / (μ ℓ (ωₙ² − Ωₙ²)), ωₙ² = ((nπ/ℓ)² T + (nπ/ℓ)⁴ EI) / μ,
+    Ωₙ = nπv/ℓ."""
+    n = np.arange(1, modes + 1)[:, None]
+    k = n * np.pi / length
+    w = np.sqrt((k**2 * tension + k**4 * ei) / mu)
+    om = k * v
+    q = 2 * force * (np.sin(om * t) - om / w * np.sin(w * t)) / (mu * length * (w**2 - om**2))
+    return np.sum(q * np.sin(k * np.asarray(x)), 0)

@@ -23,7 +23,10 @@ from ancf_jax.models.catenary import (G, WIRE_FORMULATION, CatenaryDesign, Panto
                                       design_equilibrium, moving_equilibrium, pantograph_catenary,
                                       run_pantograph_catenary)
 
-#: three short spans with the standard wires (the spans shortened for speed): the middle one is evaluated, the last is the filter's margin
+from .beam_theory import moving_load_series
+
+#: three short spans with the standard wires (shortened for speed): the middle one is
+#: evaluated, the last is the filter's margin
 RUN = dict(spans=3, span_length=10.0, droppers=(2.0, 5.0, 8.0))
 
 
@@ -76,16 +79,6 @@ def test_static_dropper_forces_match_the_hand_equilibrium():
     assert f1 / f2 > 3 and y1 / y2 > 3, (f1, f2, y1, y2)
 
 
-def modal_series(t, x, v, tension, mu, ei, length, force, modes=2000):
-    """Deflection of a pinned taut beam under a force entering at t = 0 at speed v."""
-    n = np.arange(1, modes + 1)[:, None]
-    k = n * np.pi / length
-    w = np.sqrt((k**2 * tension + k**4 * ei) / mu)
-    om = k * v
-    q = 2 * force * (np.sin(om * t) - om / w * np.sin(w * t)) / (mu * length * (w**2 - om**2))
-    return np.sum(q * np.sin(k * x), 0)
-
-
 def test_moving_force_on_the_builders_contact_wire():
     """The catenary's contact wire (20 kN, 1.35 kg/m, EI 195 N·m², engineering strain,
     stress-free length L / (1 + T / EA)) pinned over 60 m, gravity off, a 5 N force at
@@ -121,7 +114,8 @@ def test_moving_force_on_the_builders_contact_wire():
         load = res.moving_load("P")
         t = np.asarray(res.t)
         sel = (load[:, 1] > 0.25 * length) & (load[:, 1] < 0.75 * length)
-        w = modal_series(t[sel], load[sel, 1], v, wire.tension, mu, wire.bending_stiffness, length, force)
+        w = moving_load_series(t[sel], load[sel, 1], v, wire.tension, mu, wire.bending_stiffness, length, force,
+                               modes=2000)
         errors.append(np.max(np.abs(load[sel, 2] + w)) / np.max(np.abs(w)))
     assert errors[1] < 2e-3 and errors[0] / errors[1] > 3.0, errors
 

@@ -32,6 +32,7 @@ from ancf_jax.model import Model, body_point, node
 from ancf_jax.results import Results
 from ancf_jax.section import Section
 
+from .beam_theory import moving_load_series
 from .dynamics import observed_orders, run_fixed
 
 # ---------------------------------------------------------------------------- string
@@ -60,12 +61,7 @@ def string_model(n, speed, bending_stiffness):
 def modal_series(t, x, v, bending_stiffness=0.0, modes=4000):
     """Deflection w(x, t) (along the load) of the pinned string/beam under a force P
     entering at t = 0 at speed v, by its modal series."""
-    n = np.arange(1, modes + 1)[:, None]
-    k = n * np.pi / ELL
-    w = np.sqrt((k**2 * T_STRING + k**4 * bending_stiffness) / MU)
-    om = k * v
-    q = 2 * P * (np.sin(om * t) - om / w * np.sin(w * t)) / (MU * ELL * (w**2 - om**2))
-    return np.sum(q * np.sin(k * x), 0)
+    return moving_load_series(t, x, v, T_STRING, MU, bending_stiffness, ELL, P, modes)
 
 
 #: (v / c, EI [N·m²], step [s]); the beam's step is finer so that its time error
