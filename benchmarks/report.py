@@ -323,8 +323,19 @@ def sec_agreement(d):
     return "".join(out)
 
 
+def _m1_ratio_note() -> str:
+    """The latest re-measurement of M1's single-run ratio (benchmarks/m1_ratio.py), if any."""
+    path = Path(__file__).parent / "results" / "m1_ratio.json"
+    if not path.exists():
+        return ""
+    m = json.loads(path.read_text())
+    return (f"Re-measured on {m['stamp']['date'][:10]} (`PYTHONPATH=. python benchmarks/m1_ratio.py`: the "
+            f"settings below, interleaved, median of 5): ancf_jax {m['ancf_run_s']:.3f} s against Exudyn "
+            f"{m['exudyn_run_s']:.3f} s, ratio {m['ratio']:.2f}.\n\n")
+
+
 def sec_single(d):
-    out = ["## Single runs at equal accuracy\n\n", _error_block(d)]
+    out = ["## Single runs at equal accuracy\n\n", _m1_ratio_note(), _error_block(d)]
     for r in d.get("rows", []):
         out.append(f"\n### {r['model']}, {r['n_elements']} elements, 0–{r['t_end']:g} s\n\n"
                    f"Tolerance: {r['error_measure']} ≤ {r['tolerance']:g}. Reference: ancf_jax, "
