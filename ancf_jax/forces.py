@@ -345,15 +345,21 @@ class DirectedSpringDamper(AbstractLinearSpringDamper):
         return jnp.dot(self.direction, self.b.position(system, q) - self.a.position(system, q))
 
 
-class AbstractKinkedForce(AbstractForce):
-    """A force element whose law has kinks: points in (q, v) where its stiffness or
-    force jumps (a rope going taut, a contact closing). It names them as the zero
+class AbstractKinked(eqx.Module):
+    """A law with kinks: points in (q, v) where its stiffness or force jumps (a rope
+    going taut, a contact closing, friction reversing). It names them as the zero
     crossings of :meth:`kinks`, so that fixed steps can be split there
-    (:func:`kink_values`, ``locate_crossings`` of :mod:`ancf_jax.integrate`)."""
+    (:func:`kink_values`, ``locate_crossings`` of :mod:`ancf_jax.integrate`). Force
+    elements take it through :class:`AbstractKinkedForce`; reaction-dependent forces
+    (friction, :class:`ancf_jax.sliding.SlidingFriction`) inherit it directly."""
 
     @abc.abstractmethod
     def kinks(self, system, q, v):
         """Values whose zero crossings are the kinks of the law, shape (k,), k fixed."""
+
+
+class AbstractKinkedForce(AbstractForce, AbstractKinked):
+    """A force element whose law has kinks (:class:`AbstractKinked`)."""
 
 
 class AbstractOneSidedSpringDamper(AbstractKinkedForce):
@@ -457,19 +463,24 @@ class CompressionOnlySpringDamper(AbstractOneSidedSpringDamper):
 def kink_values(system, q, v):
     """Values whose zero crossings are the kinks of the force laws of ``system``, shape
     (k,), or None when the system has none: the :meth:`AbstractKinkedForce.kinks` of
-    its kinked force elements (one-sided spring-dampers, unilateral contacts).
+    its kinked force elements (one-sided spring-dampers, unilateral contacts), then of
+    its kinked reaction-dependent forces (friction reversals).
 
     Fixed steps are split at their crossings by ``locate_crossings``
     (:mod:`ancf_jax.integrate`)."""
-    members = [f for f in system.forces if isinstance(f, AbstractKinkedForce)]
+    members = _kinked(system)
     if not members:
         return None
     return jnp.concatenate([f.kinks(system, q, v) for f in members])
 
 
+def _kinked(system) -> list:
+    return [f for f in tuple(system.forces) + tuple(system.reaction_forces) if isinstance(f, AbstractKinked)]
+
+
 def has_kinks(system) -> bool:
-    """Whether ``system`` has force elements with kinks (static)."""
-    return any(isinstance(f, AbstractKinkedForce) for f in system.forces)
+    """Whether ``system`` has force laws with kinks (static)."""
+    return bool(_kinked(system))
 
 
 # ---------------------------------------------------------------------- sets of force elements

@@ -21,7 +21,8 @@ Node crossings of sliding joints and kinks of force laws. The curvature of the c
 interpolation jumps at nodes, so the acceleration and the joint reaction jump when a
 sliding joint crosses one; the stiffness of a one-sided spring-damper jumps from 0 to k
 when it goes taut (:func:`ancf_jax.forces.kink_values`). A fixed step that straddles
-such a point loses order. With ``locate_crossings=True`` a step that changes the
+such a point loses order; sliding friction's force swings from ∓μN to ±μN within a
+few v_ε where the sliding speed reverses. With ``locate_crossings=True`` a step that changes the
 element of a sliding coordinate, or the sign of a kink value, is split at the first of
 them: the crossing fraction θ is found by regula falsi (Illinois) on
 θ ↦ g(step(θ h)) − g*, g the sliding coordinate (g* just past the node) or the kink
@@ -73,8 +74,9 @@ class RunOptions(eqx.Module):
 
     Attributes:
         drift_tolerance: largest accepted constraint violation max|Φ| [m] (and rad).
-        locate_crossings: split steps at node crossings of sliding joints and at
-            slack/taut transitions of one-sided spring-dampers.
+        locate_crossings: split steps at node crossings of sliding joints, at
+            slack/taut transitions of one-sided spring-dampers and contacts, and at
+            reversals of sliding friction.
         crossing_iterations: regula-falsi iterations to locate a crossing.
         max_halvings: when a step fails (Newton not converged, non-finite state,
             sliding jump), redo it in substeps, halving down to h / 2^max_halvings and

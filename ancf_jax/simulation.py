@@ -309,8 +309,9 @@ def simulate(system: System, state: State, *, t_end: float, dt: float | None = N
         solver: a name (see module docstring) or a solver instance.
         output_dt: output interval [s] (default: every step).
         drift_tolerance: stop when max|Φ| exceeds this [m].
-        locate_crossings: split fixed steps at node crossings of sliding joints and at
-            the kinks of one-sided spring-dampers (slack/taut, damper force limit).
+        locate_crossings: split fixed steps at node crossings of sliding joints, at
+            the kinks of one-sided spring-dampers and contacts (slack/taut, damper
+            force limit) and at reversals of sliding friction.
         max_halvings: a failed fixed step (Newton not converged, NaN) is redone in
             substeps down to dt / 2^max_halvings before the run is declared failed.
         on_failure: ``"raise"`` (a :class:`SimulationError` carrying the results up to

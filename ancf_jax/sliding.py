@@ -26,7 +26,10 @@ u = |r'(s)| ṡ [m/s] of the body relative to the material of the beam.
   :class:`~ancf_jax.forces.AbstractReactionForce` (in the implicit residual with its
   exact linearization in λ). Regularization: under a tangential load F below μN the
   body creeps at the steady speed u = v_ε artanh(F / (μ N)) (e.g. 0.55 v_ε at half the
-  sticking limit); the default v_ε = :data:`DEFAULT_REGULARIZATION`.
+  sticking limit); the default v_ε = :data:`DEFAULT_REGULARIZATION`. Its one event is
+  the reversal of u, where the force swings from ∓μN to ±μN within a speed band of a
+  few v_ε (a near-jump a fixed step blurs): with ``locate_crossings`` steps are split
+  there (:meth:`SlidingFriction.kinks`).
 """
 
 from __future__ import annotations
@@ -39,12 +42,17 @@ import equinox as eqx
 import jax.numpy as jnp
 
 from .element.strain_energy import cross2
-from .forces import AbstractForce, AbstractReactionForce
+from .forces import AbstractForce, AbstractKinked, AbstractReactionForce
 from .points import SlidingPoint
 
 #: default regularization speed v_ε of sliding friction [m/s]: a body held by friction
 #: creeps at most at v_ε artanh(F/(μN)) (0.55 mm/s at half the sticking limit)
 DEFAULT_REGULARIZATION = 1e-3
+
+#: friction reversals (:meth:`SlidingFriction.kinks`) are zero crossings of the sliding
+#: speed u beyond a dead band |u| < REVERSAL_BAND v_ε: a step that stays inside it
+#: (creep, a body at rest with round-off in u) sees a smooth law and is not split
+REVERSAL_BAND = 1e-2
 
 
 def sliding_slope(system, beam: int, sliding: int, q):
@@ -124,7 +132,7 @@ class SlidingServo(AbstractSlidingDrive):
         return self.max_force * jnp.tanh(self.gain * error / self.max_force)
 
 
-class SlidingFriction(AbstractReactionForce):
+class SlidingFriction(AbstractReactionForce, AbstractKinked):
     """Regularized Coulomb friction (plus an optional viscous part) on sliding joint
     ``joint`` (index into ``system.constraints``, a
     :class:`~ancf_jax.joints.SlidingJoint`):
@@ -174,3 +182,11 @@ class SlidingFriction(AbstractReactionForce):
 
     def multiplier_indices(self, system):
         return system.constraint_offset(self.joint) + jnp.arange(2)
+
+    def kinks(self, system, q, v):
+        """The reversal of the sliding speed u [m/s] (the law's near-jump from ∓μN to
+        ±μN): u outside the dead band ±REVERSAL_BAND·v_ε, zero inside, shape (1,)."""
+        c = self._joint(system)
+        u = sliding_speed(system, c.beam, c.sliding, q, v)
+        band = REVERSAL_BAND * self.regularization
+        return jnp.reshape(u - jnp.clip(u, -band, band), (1,))

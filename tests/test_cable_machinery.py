@@ -15,6 +15,8 @@ Compiled programs are shared: the rope runs (h is data), the incline runs (tan �
 data), one three-trolley run, one gradient program.
 """
 
+import functools
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -382,6 +384,82 @@ def test_driven_trolleys_closed_form_resistance(driven_run):
     total = total_energy(system, run)
     assert np.max(np.abs(total - total[0])) < 3e-5  # measured 1.3e-5 J of 3.2 J + 0.65 J work
     assert run.work[-1, 1] > 0.0 and run.work[-1, 2] > 0.0  # servo, pull; hauling a
+
+
+# ------------------------------------------------------------ friction reversals (events)
+K_OSC, X_OSC, T_OSC = 100.0, 0.2, 1.2
+
+
+def coulomb_oscillator():
+    """A 1 kg body on a horizontal rigid track (friction μ, default v_ε) held by a
+    100 N/m spring and released 0.2 m from the spring's rest: three half-cycles of
+    sliding (each reverses the friction force), then it sticks at 0.024 m."""
+    track = mesh.straight((-1.0, 0.0), (1.0, 0.0), 2.0, 4)
+    m = track_model(track, 1.0 + X_OSC)
+    m.slider_friction("friction", "slider", mu=MU)
+    m.spring_damper("spring", ground(-2.0, 0.0), body_point("slider_body"), stiffness=K_OSC, rest_length=2.0)
+    return m.build()
+
+
+@functools.cache
+def coulomb_reference():
+    """x(t) of the same regularized law, m ẍ = −k x − μ m g tanh(ẋ/v_ε), by scipy's
+    Radau (rtol 1e-12): a function of t over [0, T_OSC]."""
+    sol = solve_ivp(lambda _, z: [z[1], -K_OSC * z[0] - MU * G * np.tanh(z[1] / V_EPS)], (0.0, T_OSC),
+                    [X_OSC, 0.0], method="Radau", rtol=1e-12, atol=1e-14, dense_output=True, max_step=1e-3)
+    return lambda t: sol.sol(t)[0]
+
+
+def test_friction_reversals_are_located():
+    """With locate_crossings, steps are split where the sliding speed reverses
+    (SlidingFriction.kinks: the friction force swings from −μN to +μN within a few
+    v_ε). Measured on the Coulomb oscillator against the same law by Radau, max |x|
+    error over 1.6 s at h = 4, 2, 1 ms: 1.08e-3, 5.7e-4, 3.0e-4 m by default, 7.2e-4,
+    4.6e-4, 2.1e-4 m located (here over 1.2 s, the sliding phase and the start of the
+    sticking): 1.3-1.5 times smaller, first order either way (the
+    force's near-jump still falls inside the step after the split, as for a damped
+    rope engaging; docs/cable-machinery.md). Each located run finds the three
+    reversals (and three node crossings), none in the sticking phase (the dead band)."""
+    plain, located = RunOptions(max_halvings=6), RunOptions(locate_crossings=True, max_halvings=6)
+    errors = {}
+    for label, options in (("plain", plain), ("located", located)):
+        for h in (0.004, 0.001):
+            system, state = coulomb_oscillator()
+            run = run_fixed(system, state, GeneralizedAlpha().forward_only(), h, T_OSC, chunk=100, options=options)
+            assert run.status == 0
+            x = run.q[:, system.sliding_offset] - 1.0
+            errors[label, h] = np.max(np.abs(x - coulomb_reference()(np.minimum(run.t, T_OSC))))
+            if label == "located":
+                assert run.crossings.sum() == 6  # 3 reversals + 3 node crossings (x = 0 at s = 1)
+    for h in (0.004, 0.001):
+        assert errors["located", h] < 0.8 * errors["plain", h], errors
+    assert 2.5 < errors["located", 0.004] / errors["located", 0.001] < 5.0, errors  # first order
+    assert errors["located", 0.001] < 2.5e-4, errors
+
+
+# ---------------------------------------------------------------------- eyelets, capstan
+def test_cable_through_frictional_eyelets():
+    """A cable drawn through n = 1 and 2 frictional point eyelets turning it by π/2
+    (benchmarks/eyelets.py): the steady hold/load ratio matches the elastic rod's
+    point-eyelet closed form at the measured turn (measured 2e-5 and 5e-5 relative;
+    mesh ℓ/4 against ℓ/8: 1.4e-4), not the string's bisector formula (14 % and 3 %
+    off), and approaches the capstan value e^(μθ) as n grows (3.6 % off at n = 1,
+    0.9 % at n = 2; 0.2 % and 0.01 % at n = 4 and 16 in the benchmark). At one eyelet
+    the tension jump is the friction μN (steady sliding's energy balance)."""
+    from benchmarks.eyelets import MU as MU_EYELET, T_LOAD, eyelet_run
+
+    runs = {n: eyelet_run(n) for n in (1, 2)}
+    for n, r in runs.items():
+        assert r["ratio"] == pytest.approx(r["rod"], rel=1e-3), r
+        assert r["spread"] < 0.02, r  # the axial ringing around the steady state
+        # the eyelet's s decreases (the cable runs towards the drawn end): F = +μN on it
+        np.testing.assert_allclose(r["friction"], MU_EYELET * np.asarray(r["normal"]), rtol=1e-6)
+    one = runs[1]
+    assert abs(one["ratio"] - one["string"]) > 0.1
+    assert (one["ratio"] - 1.0) * T_LOAD == pytest.approx(one["friction"][0], rel=2e-3)
+    assert all(abs(r["ratio"] - r["string"]) > 20 * abs(r["ratio"] - r["rod"]) for r in runs.values())
+    gaps = [abs(runs[n]["ratio"] - runs[n]["capstan"]) for n in (1, 2)]
+    assert gaps[1] < gaps[0] / 3.0, gaps
 
 
 def test_newton_matrix_holds_the_friction_linearization(incline_runs):

@@ -34,8 +34,8 @@ class RunSettings:
         output_dt: sample interval [s] (None: every step).
         solver_options: options passed to the solver (only those given in the file).
         drift_tolerance: stop when max|Φ| exceeds this [m].
-        locate_crossings: split steps at node crossings of sliding joints and slack/taut
-            kinks of one-sided members.
+        locate_crossings: split steps at node crossings of sliding joints, slack/taut
+            kinks of one-sided members and contacts, and friction reversals.
     """
 
     solver: str

@@ -688,7 +688,7 @@ class SolverSpec(Table):
     t_end: float = key(unit="s", gt=0.0, allow_inf_nan=False, doc="end time; the run starts at t = 0")
     drift_tolerance: float = key(RunOptions.drift_tolerance, unit="m", gt=0.0, allow_inf_nan=False,
                                  doc="stop when max|Φ| exceeds this")
-    locate_crossings: bool = key(RunOptions.locate_crossings, doc="split steps at node crossings of sliding joints and slack/taut kinks of one-sided members")
+    locate_crossings: bool = key(RunOptions.locate_crossings, doc="split steps at node crossings of sliding joints, slack/taut kinks of one-sided members and contacts, and friction reversals")
     generalized_alpha: GeneralizedAlphaOptions = key(GeneralizedAlphaOptions(),
                                                      doc="options used when name = generalized-alpha")
     rk4: ExplicitOptions = key(ExplicitOptions(), doc="options used when name = rk4")
