@@ -26,7 +26,7 @@ import sys
 from pathlib import Path
 
 from ._version import __version__
-from .errors import StaticsError
+from .errors import ModelError, StaticsError
 
 class _Parser(argparse.ArgumentParser):
     """argparse with one-line errors: ``ancf-jax run: error: argument --t-end: ...``."""
@@ -404,12 +404,15 @@ def _continue(args, scs, kw) -> dict:
     from .simulation import load_checkpoint, simulate
     if len(scs) != 1:
         raise _UsageError("argument --continue-from: continues one run (give one element count)")
+    (label, sc), = scs.items()
+    try:
+        system, _ = sc.build()
+    except ModelError as e:  # e.g. conflicting joints: the model's error, not the file's
+        raise _UsageError(f"{sc.path}: {e}") from None
     try:
         checkpoint = load_checkpoint(args.continue_from)
     except (OSError, ValueError, KeyError, ModelError) as e:
         raise _UsageError(f"argument --continue-from: {e}") from None
-    (label, sc), = scs.items()
-    system, _ = sc.build()
     if tuple(checkpoint.q.shape) != (system.n_coordinates,):
         raise _UsageError(f"argument --continue-from: {args.continue_from} holds {checkpoint.q.shape[0]} "
                           f"coordinates, the model {system.n_coordinates}; give the model, --elements and "
@@ -835,6 +838,18 @@ def _fit(args) -> int:
     return 0 if all(r.converged for r in results) else 1
 
 
+def _model_path(args) -> str:
+    """``"FILE: "`` of the command's scenario for a message (``""`` when it cannot be named)."""
+    model = getattr(args, "model", None)
+    if model is None:
+        return ""
+    try:
+        from .scenario.loader import resolve
+        return f"{resolve(model)}: "
+    except Exception:  # noqa: BLE001 - only for the message
+        return f"{model}: "
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``ancf-jax``: parse ``argv`` (default ``sys.argv[1:]``), run the
     command and return the exit status (0 ok, 1 failed run, 2 bad input, 130
@@ -849,6 +864,9 @@ def main(argv: list[str] | None = None) -> int:
                 "fit": _fit, "fatigue": _fatigue, "sweep": _sweep}[args.command](args)
     except _UsageError as e:
         print(f"ancf-jax {args.command}: error: {e}", file=sys.stderr)
+        return 2
+    except ModelError as e:  # bad model input found while building (e.g. conflicting joints), before compiling
+        print(f"ancf-jax {args.command}: error: {_model_path(args)}{e}", file=sys.stderr)
         return 2
     except StaticsError as e:  # a static equilibrium (the command's, or a run's initial state) not found
         print(f"ancf-jax {args.command}: {e}", file=sys.stderr)

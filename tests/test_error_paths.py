@@ -239,9 +239,16 @@ def test_check_finds_redundant_joints(capsys):
     usage_error(["check", "m1", "--set", pin], capsys, "redundant", "clamp", "pin")
 
 
-def test_run_refuses_conflicting_joints_with_one_line(capsys, tmp_path):
+@pytest.mark.parametrize("command", [
+    ["run"], ["static"], ["modal"], ["fatigue", "--study", "alpha=0.1,0.2"],
+    ["run", "--continue-from", "earlier.npz"],
+], ids=["run", "static", "modal", "fatigue-study", "continue-from"])
+def test_run_refuses_conflicting_joints_with_one_line(command, capsys, tmp_path):
+    """Every command that builds the model refuses conflicting joints with one line
+    and exit 2 (static, modal, fatigue --study and --continue-from gave a traceback)."""
     pin = 'joints.pin={type="pin", point={beam="beam", node=0}, location=[0.1, 0.0]}'
-    usage_error(["run", "m1", "--set", pin, "--out", str(tmp_path / "o")], capsys, "conflicting")
+    out = ["--out", str(tmp_path / "o")] if command[0] in ("run", "fatigue") else []
+    usage_error([command[0], "m1", "--set", pin, *command[1:], *out], capsys, "conflicting", "m1.toml")
     assert not (tmp_path / "o").exists()
 
 
