@@ -602,6 +602,10 @@ def _fatigue_study(args, base, sc, settings) -> int:
 
 
 def _sweep(args) -> int:
+    # the store and the NetCDF file: checked before anything is imported, built or run
+    _check_out(args.out)
+    if args.netcdf is not None:
+        _check_out(args.netcdf, "--netcdf", file=True)
     try:
         from .sweep import SweepError, parse_param, run_sweep
         from .sweep.store import to_netcdf

@@ -70,6 +70,21 @@ def test_out_under_a_file_is_refused(tmp_path, capsys):
         usage_error(argv, capsys, "argument --out", "which is not a directory")
 
 
+def test_sweep_out_and_netcdf_locations_are_checked_before_running(tmp_path, capsys):
+    """sweep checks its store (--out) and --netcdf file before importing zarr or
+    compiling: a bad location used to be found after every member had run."""
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    sweep = ["sweep", "m1", "--param", "beams.beam.section.E=[1e11, 2e11]", "--design", "grid"]
+    usage_error([*sweep, "--out", str(afile)], capsys, "argument --out", "not a directory")
+    usage_error([*sweep, "--out", str(afile / "store.zarr")], capsys, "argument --out", "which is not a directory")
+    usage_error([*sweep, "--out", str(tmp_path / "store.zarr"), "--netcdf", str(afile / "x.nc")], capsys,
+                "argument --netcdf", "which is not a directory")
+    usage_error([*sweep, "--out", str(tmp_path / "store.zarr"), "--netcdf", str(tmp_path)], capsys,
+                "argument --netcdf", "is a directory")
+    assert not (tmp_path / "store.zarr").exists()
+
+
 def test_out_in_a_read_only_directory_is_refused(tmp_path, capsys):
     ro = tmp_path / "ro"
     ro.mkdir()
