@@ -185,12 +185,16 @@ def build_parser() -> argparse.ArgumentParser:
     check = sub.add_parser("check", help="validate a scenario without running it",
                            description="Validate a scenario without running it: the file, the joints "
                                        "(redundant or conflicting, from the rank of the constraint "
-                                       "Jacobian at the initial state) and the time functions on the "
-                                       "output time grid; prints a summary.")
+                                       "Jacobian at the initial state), the time functions on the "
+                                       "run's step and output time grids and the size of the run "
+                                       "(time steps, output; --max-steps); prints a summary.")
     check.add_argument("model", metavar="MODEL", help="shipped scenario name, FILE.toml or FILE.json")
     check.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                        help="override a scenario key before validating it (dotted path, TOML value, "
                             "e.g. solver.dt=1e-4), as run does; repeatable")
+    check.add_argument("--max-steps", type=_positive_int, default=None,
+                       help=f"the most time steps accepted, as for run (default {MAX_STEPS:.0e}): a longer "
+                            "run is refused here as run would refuse it")
 
     synth = sub.add_parser("synth", help="synthetic measurements t,y of a model output (noisy)",
                            description="Simulate a model with given Rayleigh coefficients and write "
@@ -210,6 +214,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="solver step [s] (default: the scenario's solver.dt)")
     synth.add_argument("--seed", type=_nonnegative_int, default=0, help="seed of the noise (default 0)")
     synth.add_argument("--output", default="tip_y", help="output column to sample (default tip_y)")
+    synth.add_argument("--max-steps", type=_positive_int, default=None,
+                       help=f"the most time steps accepted (default {MAX_STEPS:.0e}; a longer run is "
+                            "refused before compiling)")
     synth.add_argument("--out", type=Path, required=True, help="CSV file to write")
 
     sweep = sub.add_parser("sweep", help="parameter sweep into a Zarr store (local devices or Ray)",
@@ -264,6 +271,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="nuisance parameters of the measurement fitted with the others, comma-separated: "
                           "time_offset (trigger delay: the record's t is the model's t + tau), offset, gain "
                           "(the sensor reads gain * y + offset); default none")
+    fit.add_argument("--max-steps", type=_positive_int, default=None,
+                     help=f"the most time steps of one simulation accepted (default {MAX_STEPS:.0e}; a "
+                          "longer one is refused before compiling)")
     fit.add_argument("--max-time-offset", type=_positive_float, default=None,
                      help="bound |tau| on a fitted time offset [s] (default 0.05)")
     fit.add_argument("--noise", type=_positive_float, default=None,
@@ -703,12 +713,27 @@ def _modal(args) -> int:
 def _check(args) -> int:
     from .errors import ModelError
     sc = _load(args.model, args.overrides)
+    _check_size(args, {"": sc}, sc.solver)  # what run refuses as too long, check refuses too
     try:  # the joints: rank of the constraint Jacobian at the initial state, assembly
         sc.model().build()
     except ModelError as e:
-        raise _UsageError(f"{sc.path}: joints: {e}") from None
+        raise _UsageError(f"{sc.path}: {e}") from None
     print(sc.summary())
     return 0
+
+
+def _check_identification_size(args, elements):
+    """The run-size check of ``synth``/``fit`` (their simulation outputs every step),
+    from the scenario as :meth:`~ancf_jax.identification.Problem.from_scenario` reads it."""
+    import types
+    extra = [] if args.dt is None else [f"solver.dt={args.dt!r}", f"outputs.dt={args.dt!r}"]
+    sc = _load(args.model, list(args.overrides) + extra)
+    if elements is not None and len(sc.beam_elements) == 1:
+        sc = _load(args.model, list(args.overrides) + extra + [f"beams.{next(iter(sc.beam_elements))}.elements={elements}"])
+    run = sc.solver
+    settings = types.SimpleNamespace(t_end=run.t_end if args.t_end is None else args.t_end, dt=run.dt,
+                                     output_dt=run.dt, solver=run.solver)
+    _check_size(args, {"": sc}, settings)
 
 
 def _identification_problem(args, params, nuisance=()):
@@ -722,6 +747,7 @@ def _identification_problem(args, params, nuisance=()):
             elements = _positive_int(args.elements)
         except argparse.ArgumentTypeError as e:
             raise _UsageError(f"argument --elements: {e}") from None
+    _check_identification_size(args, elements)
     try:
         extra = {}
         if nuisance:

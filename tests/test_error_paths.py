@@ -161,10 +161,28 @@ def test_run_interrupted_writes_results_and_exits_130(interrupting, tmp_path, ca
     (["run", "m1", "--dt", "1e-12"], "--dt = 1e-12 s"),
     (["run", "m1", "--t-end", "1e9"], "--t-end = 1e+09 s"),
     (["fatigue", "m1", "--dt", "1e-12"], "--dt = 1e-12 s"),
+    (["synth", "m1", "--noise", "0", "--dt", "1e-12", "--out", "x.csv"], "--dt = 1e-12 s"),
+    (["fit", "m1", "--data", "data.csv", "--dt", "1e-12"], "--dt = 1e-12 s"),
+    (["fit", "m1", "--data", "data.csv", "--t-end", "1e9"], "--t-end = 1e+09 s"),
+    (["check", "m1", "--set", "solver.dt=1e-12"], "solver.dt = 1e-12 s"),
 ])
-def test_runaway_runs_are_refused_with_the_estimate(argv, fragment, capsys):
+def test_runaway_runs_are_refused_with_the_estimate(argv, fragment, capsys, tmp_path, monkeypatch):
+    """run, fatigue, synth, fit and check refuse a run of more than MAX_STEPS steps
+    before compiling, with the estimate and the option that allows it."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "data.csv").write_text("t,y\n" + "".join(f"{k / 100},0.0\n" for k in range(20)))
     line = usage_error(argv, capsys, fragment, "time steps", "--max-steps")
     assert "2e+12" in line or "1e+12" in line
+
+
+def test_check_and_synth_take_max_steps(capsys, tmp_path):
+    """--max-steps lifts the limit in check (which then validates) as in run."""
+    code, out, err = run_cli(["check", "m1", "--set", "solver.t_end=200", "--max-steps", "300000"], capsys)
+    assert code == 0 and "valid scenario 'm1'" in out, err
+    usage_error(["check", "m1", "--set", "solver.t_end=200", "--max-steps", "1000"], capsys,
+                "solver.t_end = 200 s", "2e+05 time steps", "--max-steps = 1e+03")
+    usage_error(["synth", "m1", "--noise", "0", "--max-steps", "10", "--out", str(tmp_path / "y.csv")],
+                capsys, "time steps", "--max-steps = 10")
 
 
 def test_max_steps_is_checked_and_lifts_the_limit():
