@@ -210,6 +210,14 @@ def test_time_functions_not_finite_on_the_grid_are_refused(expr, value, capsys):
                     "not finite at t = 0 s", f"value {value}")
 
 
+def test_time_functions_are_checked_at_the_steps_between_outputs(capsys):
+    """1/(t - 0.005) is finite at every output time (0, 0.01, ...) but infinite at the
+    fifth step of 0.001 s, where the solver evaluates it."""
+    load = 'loads.spin={type="torque", body="tip", torque=1.0, time_function="1/(t-0.005)"}'
+    usage_error(["check", "m1", "--set", load, "--set", "outputs.dt=0.01", "--set", "solver.dt=0.001"], capsys,
+                "loads.spin.time_function", "not finite at t = 0.005 s", "every time step")
+
+
 def test_prescribed_motion_not_finite_later_names_the_joint(tmp_path, capsys):
     data = tomllib.loads(M1.read_text())
     data["joints"]["drive"] = {"type": "prescribed_body", "body": "tip", "coordinate": "theta",

@@ -3,8 +3,8 @@
 Run on the validated schema (:class:`~.schema.ScenarioSpec`) with host data only:
 names and their uniqueness, references to beams, bodies, joints and body points,
 node indices, arc lengths inside beams, keys that exclude or require each other, the
-output interval inside the run, and every time function finite at the run's output
-times (evaluated with NumPy: nothing is compiled).
+output interval inside the run, and every time function finite at the run's time
+steps and output times (evaluated with NumPy: nothing is compiled).
 The first problem raises :class:`~.errors.Invalid` with its key path.
 """
 
@@ -26,6 +26,8 @@ POINT_FORMS = ('{ ground = [x, y] }, { body = "name" } with optional local = [x,
                '{ beam = "name", node = i } or { beam = "name", s = arc length }')
 #: most output times at which the time functions are checked (a longer grid is sampled)
 MAX_CHECKED_TIMES = 100_001
+#: most time steps at which the time functions are checked (a longer grid is sampled)
+MAX_CHECKED_STEPS = 1_000_001
 #: constraint equations of each joint type (clamp: by mode)
 JOINT_SIZE = {"pin": 2, "revolute": 2, "fixed": 3, "sliding": 2, "prescribed_point": 2,
               "prescribed_body": 1}
@@ -507,9 +509,24 @@ class Checker:
             return np.linspace(0.0, sol.t_end, MAX_CHECKED_TIMES)
         return sol.t_end / n * np.arange(n + 1)
 
+    def step_times(self) -> np.ndarray:
+        """The times [s] of the run's fixed steps (every h <= solver.dt between output
+        times), as :func:`ancf_jax.simulation.time_grid` places them; at most
+        :data:`MAX_CHECKED_STEPS` of them (evenly spread) on a longer grid."""
+        sol = self.spec.solver
+        step = self.spec.outputs.dt if self.spec.outputs.dt is not None else sol.dt
+        n = max(1, int(round(sol.t_end / step)))
+        sub = max(1, int(np.ceil(sol.t_end / n / sol.dt * (1 - 1e-9))))
+        steps = n * sub
+        if steps + 1 > MAX_CHECKED_STEPS:
+            return np.linspace(0.0, sol.t_end, MAX_CHECKED_STEPS)
+        return sol.t_end / n / sub * np.arange(steps + 1)
+
     def time_functions(self):
-        """Every expression finite at the output times and at statics.time."""
-        times = np.append(self.output_times(), self.spec.statics.time)
+        """Every expression finite at the time steps, the output times and statics.time
+        (a step between output times is where the solver evaluates it too: 1/(t − 0.005)
+        with outputs every 0.01 s and steps of 0.001 s is infinite at the fifth step)."""
+        times = np.unique(np.concatenate([self.step_times(), self.output_times(), [self.spec.statics.time]]))
         sol = self.spec.solver
         for group in ("moving_masses", "chains", "joints", "loads"):
             for name, item in getattr(self.spec, group).items():
@@ -525,8 +542,8 @@ class Checker:
                     if np.any(bad):
                         i = int(np.argmax(bad))
                         raise Invalid((group, name, key), f"{f.text!r} is not finite at t = {times[i]:g} s "
-                                      f"(value {values[i]})", "a time function finite at every output "
-                                      f"time 0 .. {sol.t_end:g} s and at statics.time [s]")
+                                      f"(value {values[i]})", "a time function finite at every time step "
+                                      f"and output time 0 .. {sol.t_end:g} s and at statics.time [s]")
 
     def outputs(self):
         for name, o in self.spec.outputs.columns.items():
