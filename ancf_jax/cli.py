@@ -128,7 +128,9 @@ def build_parser() -> argparse.ArgumentParser:
     common(run, "element count of the (single) beam; comma-separated counts run as one vmapped "
                 "batch (m1 default 6, m2 default 12,18,24)")
     run.add_argument("--t-end", type=_positive_float, default=None, help="end time [s]")
-    run.add_argument("--dt", type=_positive_float, default=None, help="time step [s]")
+    run.add_argument("--dt", type=_positive_float, default=None,
+                     help="time step [s] (without --output-dt, a shorter output step of the scenario is "
+                          "raised to it, with a note)")
     run.add_argument("--output-dt", type=_positive_float, default=None, help="output interval [s]")
     run.add_argument("--solver", choices=SOLVERS, default=None, help="integrator")
     run.add_argument("--rho-inf", type=_nonnegative_float, default=None,
@@ -170,7 +172,8 @@ def build_parser() -> argparse.ArgumentParser:
                                          "figures (default directory results/MODEL-fatigue).")
     common(fatigue, "element count of the (single) beam")
     fatigue.add_argument("--t-end", type=_positive_float, default=None, help="end time [s]")
-    fatigue.add_argument("--dt", type=_positive_float, default=None, help="time step [s]")
+    fatigue.add_argument("--dt", type=_positive_float, default=None,
+                         help="time step [s] (a shorter output step of the scenario is raised to it, with a note)")
     fatigue.add_argument("--out", type=Path, default=None, help="output directory (default results/MODEL-fatigue)")
     fatigue.add_argument("--max-steps", type=_positive_int, default=None,
                          help=f"the most time steps accepted (default {MAX_STEPS:.0e})")
@@ -351,6 +354,33 @@ def _check_size(args, scs, settings):
             raise _UsageError(str(e)) from None
 
 
+def _output_step_for(args, command: str, overrides) -> list[str]:
+    """``--dt`` without ``--output-dt``: when the scenario's output step (``outputs.dt``,
+    after ``overrides``) is shorter than ``--dt``, raise it to ``--dt`` and say so in one
+    line on stderr (outputs are taken at steps, so a shorter one cannot be kept). Returns
+    the override to add (none when nothing changes or ``outputs.dt`` is set with --set)."""
+    if args.dt is None or getattr(args, "output_dt", None) is not None:
+        return []
+    if any(item.partition("=")[0].strip() == "outputs.dt" for item in overrides):
+        return []  # asked for explicitly: the scenario check names it if it conflicts
+    from .scenario.loader import _parse, apply_overrides, resolve
+    try:  # the raw file with the overrides; its errors are reported by the full load
+        path = resolve(args.model)
+        data = _parse(str(path), path, path.read_text(encoding="utf-8"))
+        apply_overrides(data, overrides, str(path))
+        out_dt = float(data.get("outputs", {}).get("dt"))
+    except Exception:  # noqa: BLE001 - no outputs.dt, or a file the full load refuses
+        return []
+    if not (math.isfinite(out_dt) and out_dt < args.dt * (1 - 1e-9)):
+        return []
+    print(f"ancf-jax {command}: note: the scenario's output step outputs.dt = {out_dt:g} s is shorter than "
+          f"--dt = {args.dt:g} s: outputs every {args.dt:g} s (give --output-dt to choose another)"
+          if command == "run" else
+          f"ancf-jax {command}: note: the scenario's output step outputs.dt = {out_dt:g} s is shorter than "
+          f"--dt = {args.dt:g} s: outputs every {args.dt:g} s", file=sys.stderr)
+    return [f"outputs.dt={args.dt!r}"]
+
+
 def _load(source, overrides):
     from .scenario import ScenarioError, load_scenario
     try:
@@ -457,7 +487,11 @@ def _run(args) -> int:
     if args.solver is not None:
         extra.append(f'solver.name="{args.solver}"')
     if args.output_dt is not None:
+        if args.dt is not None and args.output_dt < args.dt * (1 - 1e-9):
+            raise _UsageError(f"argument --output-dt: {args.output_dt:g} s is shorter than --dt = {args.dt:g} s "
+                              f"(accepted: a number >= {args.dt:g} [s]; outputs are taken at steps)")
         extra.append(f"outputs.dt={args.output_dt!r}")
+    extra += _output_step_for(args, "run", list(args.overrides) + extra)
     if args.rho_inf is not None:
         if args.rho_inf > 1.0:
             raise _UsageError(f"argument --rho-inf: must be in [0, 1], got {args.rho_inf}")
@@ -526,6 +560,7 @@ def _fatigue(args) -> int:
     from .errors import ModelError
     from .fatigue import analyse, settings_from_table
     extra = [f"solver.{k}={v!r}" for k, v in (("t_end", args.t_end), ("dt", args.dt)) if v is not None]
+    extra += _output_step_for(args, "fatigue", list(args.overrides) + extra)
     if args.out is not None:
         _check_out(args.out)
     base, scs = _scenarios(args, extra=extra)

@@ -251,6 +251,21 @@ def test_output_interval_longer_than_the_run_is_refused(capsys):
                 "longer than the run", "0.001 .. 0.5")
 
 
+@pytest.mark.parametrize("command", ["run", "fatigue"])
+def test_dt_longer_than_the_output_step_raises_the_output_step(command, capsys, tmp_path):
+    """--dt 0.05 on M1 (outputs every 1 ms) used to fail naming outputs.dt, which the
+    user never gave: the output step is raised to --dt with a one-line note (here the
+    run is then refused by --max-steps 1, before compiling, on the raised grid)."""
+    code, _, err = run_cli([command, "m1", "--dt", "0.05", "--max-steps", "1", "--out", str(tmp_path / "o")],
+                           capsys)
+    assert code == 2 and len(err) == 2, err
+    assert "note" in err[0] and "outputs.dt = 0.001 s" in err[0] and "outputs every 0.05 s" in err[0]
+    assert "--dt = 0.05 s needs about 40 time steps" in err[1]
+    # an output step asked for explicitly is not changed: the two options are named
+    usage_error(["run", "m1", "--dt", "0.05", "--output-dt", "0.01"], capsys, "argument --output-dt",
+                "shorter than --dt = 0.05 s", "accepted: a number >= 0.05")
+
+
 def test_more_modes_than_degrees_of_freedom_names_the_maximum(capsys):
     usage_error(["modal", "m1", "--modes", "10000"], capsys, "argument --modes", "1 .. 24")
 
