@@ -242,6 +242,52 @@ def test_zero_length_ramp_is_refused(capsys):
                 "zero-length")
 
 
+def test_body_far_from_its_fixed_joint_needs_local(capsys):
+    """A tip body 5 m from the node it is fixed to was welded on through an invisible
+    rigid arm: without local it is refused naming the joint; with local (an intended
+    arm) it is accepted."""
+    far = "bodies.tip.position=[5.0, 0.0]"
+    usage_error(["check", "m1", "--set", far], capsys, "joints.tip_joint.local", "4.598 m", "rigid arm",
+                "accepted: local = [x, y]")
+    code, out, err = run_cli(["check", "m1", "--set", far, "--set", "joints.tip_joint.local=[-4.598, 0.0]"],
+                             capsys)
+    assert code == 0 and "valid scenario 'm1'" in out, err
+
+
+def test_model_refuses_a_hidden_rigid_arm():
+    from ancf_jax import mesh
+    from ancf_jax.model import Model, node
+    from ancf_jax.section import Section
+
+    def model(position, local=None):
+        m = Model(gravity=(0.0, 0.0))
+        m.add_beam("arm", mesh.straight((0, 0), (1, 0), 1.0, 2), Section(1e6, 1e-4, 1e-10, 0.1))
+        m.add_body("tip", mass=0.1, inertia=1e-4, position=position)
+        m.clamp("root", "arm", node=0)
+        m.fixed("weld", node("arm", -1), body="tip", local=local)
+        return m
+
+    with pytest.raises(ModelError, match=r"fixed joint 'weld': body 'tip' starts 5 m from node -1 of beam 'arm'"
+                                         r".*rigid arm.*give local"):
+        model((1.0, 5.0)).build()
+    model((1.0, 5.0), local=(0.0, -5.0)).build()  # an intended arm
+    model((1.0 + 1e-13, 0.0)).build()  # round-off is not an arm
+
+
+def test_zero_length_spring_is_refused(capsys):
+    """A spring-damper whose ends coincide at the start failed one step in as 'state
+    became NaN' (its direction is undefined at zero length): refused naming the load,
+    by the scenario check where the file fixes both points, else by the build."""
+    spring = 'loads.s={{type="spring_damper", a={a}, b={{body="tip"}}, stiffness=100.0}}'
+    usage_error(["check", "m1", "--set", spring.format(a="{ground=[0.402, 0.0]}")], capsys,
+                "loads.s", "coincide at the initial state", "accepted: two points that start apart")
+    usage_error(["check", "m1", "--set", spring.format(a='{beam="beam", s=0.402}')], capsys,
+                "spring-damper 's'", "coincide at the initial state", "s = 0.402 m on beam 'beam' and body 'tip'")
+    from ancf_jax.model import Model, body_point
+    with pytest.raises(ModelError, match="spring-damper 'k': both ends are body 'b'"):
+        Model().spring_damper("k", body_point("b"), body_point("b"), stiffness=1.0)
+
+
 def test_empty_element_count_is_refused(capsys):
     usage_error(["run", "m2", "--elements", "6,,"], capsys, "argument --elements", "'6,,'")
 

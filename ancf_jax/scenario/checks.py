@@ -159,6 +159,45 @@ class Checker:
             raise Invalid(path, f'body "{body}" has no point "{name}"',
                           f'a name in bodies.{body}.points: {_names(points)}')
 
+    def initial_position(self, ref: S.PointRef, depth: int = 0):
+        """The point's initial position [m] (host only) where the file fixes it: a ground
+        point, a body point of a body with ``position`` (or ``at`` such a point), a node
+        of a beam whose initial shape gives every node; None otherwise (the build
+        checks those)."""
+        if ref.ground is not None:
+            return np.asarray(ref.ground, float)
+        if ref.body is not None:
+            b = self.spec.bodies.get(ref.body)
+            if b is None or depth > len(self.spec.bodies):
+                return None
+            centre = (np.asarray(b.position, float) if b.position is not None else
+                      self.initial_position(b.at, depth + 1) if b.at is not None else np.zeros(2))
+            if centre is None:
+                return None
+            local = (np.asarray(b.points[ref.point], float) if ref.point is not None and ref.point in b.points
+                     else np.asarray(ref.local or (0.0, 0.0), float))
+            c, sn = np.cos(b.angle), np.sin(b.angle)
+            return centre + np.array([[c, -sn], [sn, c]]) @ local
+        if ref.beam is not None and ref.node is not None and ref.beam in self.spec.beams:
+            n = self.elements[ref.beam]
+            nodes = initial_node_positions(self.spec.beams[ref.beam], n, self.lengths[ref.beam])
+            if len(nodes) != n + 1:
+                return None
+            return nodes[ref.node]
+        return None
+
+    def apart(self, path, a: S.PointRef, b: S.PointRef):
+        """A spring-damper's ends must start apart (at zero length its direction, the
+        gradient of its length, is undefined: the run would fail as 'state became NaN')."""
+        pa, pb = self.initial_position(a), self.initial_position(b)
+        if pa is None or pb is None:
+            return
+        d = float(np.linalg.norm(pa - pb))
+        if d <= 1e-9 * max(float(np.max(np.abs(pa))), float(np.max(np.abs(pb)))) + 1e-12:
+            raise Invalid(path, f"its ends a and b coincide at the initial state ({pa[0]:g}, {pa[1]:g}) m: at zero "
+                          "length the spring's direction (the gradient of its length) is undefined",
+                          "two points that start apart")
+
     @staticmethod
     def exclusive(path, obj, keys, *, required=False):
         given = [k for k in keys if getattr(obj, k) is not None]
@@ -339,6 +378,7 @@ class Checker:
                 self.body(path + ("body",), j.body)
             if j.type == "fixed":
                 self.rotating(path + ("body",), j.body, "a fixed joint")
+                self.no_hidden_arm(path, name, j)
             if j.type == "prescribed_body" and j.coordinate == "theta":
                 self.rotating(path + ("body",), j.body, "a prescribed theta")
             if j.type == "sliding" and any(j.local):
@@ -362,6 +402,22 @@ class Checker:
                         raise Invalid(path + ("drive", "time_function"),
                                       f"only a force drive takes it (this drive gives {given[0]})",
                                       "no key, or force = F")
+
+    def no_hidden_arm(self, path, name, j: S.FixedSpec):
+        """Without ``local``, a fixed joint's body must start at the joint's point: a body
+        placed elsewhere would be welded on through an invisible rigid arm."""
+        if j.local is not None:
+            return
+        at = self.initial_position(j.point)
+        centre = self.initial_position(S.PointRef(body=j.body))
+        if at is None or centre is None:
+            return  # the build checks it
+        d = float(np.linalg.norm(at - centre))
+        if d > 1e-9 * max(float(np.max(np.abs(at))), float(np.max(np.abs(centre)))) + 1e-12:
+            raise Invalid(path + ("local",), f'missing: body "{j.body}" starts {d:.4g} m from the point the joint '
+                          f"holds ({at[0]:g}, {at[1]:g}) m, and without local it would be welded on through an "
+                          "invisible rigid arm", "local = [x, y], the body point at the joint in the body frame, "
+                          "for an intended arm; or the body placed at the point")
 
     def rotating(self, path, body, what):
         if body in self.made_bodies:
@@ -413,6 +469,8 @@ class Checker:
             else:
                 self.point(path + ("a",), f.a)
                 self.point(path + ("b",), f.b)
+                if f.type == "spring_damper":
+                    self.apart(path, f.a, f.b)
 
     def monotonic(self, path, beam):
         """along = "x" needs a beam whose initial x is strictly monotonic along it."""
