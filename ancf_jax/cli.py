@@ -154,7 +154,12 @@ def build_parser() -> argparse.ArgumentParser:
     common(static, "element count of the (single) beam")
     static.add_argument("--json", action="store_true", help="print one JSON object")
 
-    modal = sub.add_parser("modal", help="natural frequencies [Hz]")
+    modal = sub.add_parser("modal", help="natural frequencies [Hz]",
+                           description="Natural frequencies [Hz] of the model linearized about its initial "
+                                       "state or its static equilibrium. A negative frequency (-sqrt(-omega^2)/2pi) "
+                                       "marks omega^2 < 0: the configuration is unstable about the chosen state "
+                                       "(e.g. a slack cable in its reference shape; try --about equilibrium); a "
+                                       "note says so (the key note with --json).")
     common(modal, "element count of the (single) beam")
     modal.add_argument("--about", choices=tuple(_ABOUT), default=None,
                        help="linearize about the initial state or the static equilibrium (with the "
@@ -162,7 +167,8 @@ def build_parser() -> argparse.ArgumentParser:
                             "equilibrium (default: the scenario's modal.about)")
     modal.add_argument("--modes", type=_positive_int, default=None,
                        help="number of lowest modes (default: the scenario's modal.modes)")
-    modal.add_argument("--json", action="store_true", help='print {"frequencies_hz": [...]}')
+    modal.add_argument("--json", action="store_true",
+                       help='print {"frequencies_hz": [...]} (and "note" when a frequency is negative)')
 
     fatigue = sub.add_parser("fatigue", help="fatigue damage and life along the beams of a run",
                              description="Simulate a model with its scenario settings and assess fatigue "
@@ -735,14 +741,29 @@ def _modal(args) -> int:
                           f"freedom (accepted: an integer 1 .. {dof})")
     res = modal_analysis(system, q, lam, n_modes=modes)
     freqs = [float(f) for f in res.frequencies_hz]
+    note = _negative_frequency_note(freqs, about)
     if args.json:
-        print(json.dumps({"frequencies_hz": freqs}))
+        print(json.dumps({"frequencies_hz": freqs, **({"note": note} if note else {})}))
     else:
         n = ", ".join(f"{b}: {k} elements" for b, k in sc.beam_elements.items())
         print(f"{sc.name} natural frequencies about the {about} {'state' if about == 'initial' else 'configuration'} ({n}):")
         for i, f in enumerate(freqs, 1):
             print(f"  mode {i:2d}: {f:14.6f} Hz")
+        if note:
+            print(f"note: {note}")
     return 0
+
+
+def _negative_frequency_note(freqs, about: str) -> str | None:
+    """One line explaining negative frequencies (ω² < 0), None when there are none."""
+    count = sum(f < 0.0 for f in freqs)
+    if not count:
+        return None
+    where = ("about the initial state, e.g. a slack or sagging cable in its reference shape: use "
+             "--about equilibrium (the static equilibrium, with its stress stiffness)" if about == "initial" else
+             "about the static equilibrium: it is not a stable one (a buckled or slack configuration)")
+    return (f"{count} negative frequenc{'y' if count == 1 else 'ies'} (-sqrt(-omega^2)/2pi where omega^2 < 0): the "
+            f"configuration is unstable {where}")
 
 
 def _check(args) -> int:

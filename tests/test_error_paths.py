@@ -12,6 +12,7 @@ import os
 import tomllib
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from ancf_jax import simulation
@@ -369,6 +370,28 @@ def test_modal_honours_the_modal_table(capsys):
     code, out, _ = run_cli(["modal", "m1", "--set", "modal.modes=3", "--json"], capsys)
     assert code == 0 and len(json.loads(out)["frequencies_hz"]) == 3
     usage_error(["modal", "m1", "--set", "modal.modes=500"], capsys, "modal.modes", "1 .. 24")
+
+
+def test_negative_frequencies_are_explained(capsys, monkeypatch):
+    """omega^2 < 0 (a slack cable about its reference shape) printed negative
+    frequencies without a word: a note says what they mean and what to try, in the
+    table and as the JSON key note (modal_analysis is replaced: nothing is compiled)."""
+    from ancf_jax import modal
+    from ancf_jax.cli import _negative_frequency_note
+
+    assert _negative_frequency_note([1.0, 2.0], "initial") is None
+    assert "--about equilibrium" in _negative_frequency_note([-0.5, 2.0], "initial")
+    assert "not a stable one" in _negative_frequency_note([-0.5, -0.1], "equilibrium")
+    fake = modal.ModalResult(np.array([-0.7, 3.0]), np.array([-4.4, 18.8]), np.zeros((2, 31)))
+    monkeypatch.setattr(modal, "modal_analysis", lambda *a, **k: fake)
+    code, out, _ = run_cli(["modal", "m1", "--about", "initial", "--modes", "2", "--json"], capsys)
+    data = json.loads(out)
+    assert code == 0 and data["frequencies_hz"] == [-0.7, 3.0]
+    assert "1 negative frequency" in data["note"] and "unstable" in data["note"] and "--about equilibrium" in data["note"]
+    code, out, _ = run_cli(["modal", "m1", "--about", "initial", "--modes", "2"], capsys)
+    assert code == 0 and out.splitlines()[-1].startswith("note: 1 negative frequency")
+    code, out, _ = run_cli(["modal", "--help"], capsys)
+    assert "negative frequency" in " ".join(out.split())
 
 
 def test_check_help_says_what_set_does(capsys):
