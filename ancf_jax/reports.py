@@ -41,7 +41,9 @@ def report_m1(results: Results, out_dir: str | Path, *, figures: bool = True,
     s, sigma = results.stress_along("beam", 11)
     results.save_npz(out / f"m1_n{n}.npz", stress_s=s, stress_sigma=sigma,
                      sigma_e1_mid=cols["sigma_e1_mid"], sigma_e1_mid_small_strain=sig_approx,
-                     tip=np.column_stack([cols["tip_x"], cols["tip_y"]]))
+                     tip=np.column_stack([cols["tip_x"], cols["tip_y"]]),
+                     units=dict(stress_s="m", stress_sigma="Pa", sigma_e1_mid="Pa",
+                                sigma_e1_mid_small_strain="Pa", tip="m"))
     base = results.summary()
     summary = dict(model="m1", elements=n, solver=results.solver, dt=results.dt,
                    t_end=float(results.t[-1]), wall_time_s=results.wall_time_s,
@@ -99,7 +101,8 @@ def report_m2(runs: dict[int, Results], out_dir: str | Path, *, figures: bool = 
         reaction = r.sliding_reaction("slider")
         s, sigma = r.stress_along("cable", 11)
         r.save_npz(out / f"m2_n{n}.npz", stress_s=s, stress_sigma=sigma, sliding_reaction=reaction,
-                   **{k: v for k, v in cols.items() if k != "t"})
+                   **{k: v for k, v in cols.items() if k != "t"},
+                   units=dict(output_units(outputs), stress_s="m", stress_sigma="Pa", sliding_reaction="N"))
         base = r.summary()
         i_min = int(np.argmin(cols["point1_y"]))
         per[str(n)] = dict(elements=n, status=r.status, wall_time_s=r.wall_time_s,
@@ -177,7 +180,8 @@ def report_scenario(name: str, runs: dict, outputs, out_dir: str | Path, *, figu
         for b in r.system.beam_names:
             s, sigma = r.stress_along(b, 11)
             extra[f"stress_s_{b}"], extra[f"stress_sigma_{b}"] = s, sigma
-        r.save_npz(out / f"{stem}.npz", **extra)
+        r.save_npz(out / f"{stem}.npz", **extra,
+                   units={k: "m" if k.startswith("stress_s_") else "Pa" for k in extra})
         base = r.summary()
         entry = dict(base)
         entry.update({f"{k}_min": float(np.min(v)) for k, v in cols.items() if k != "t"})

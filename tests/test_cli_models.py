@@ -70,6 +70,12 @@ def test_run_m1_writes_every_file(tmp_path, capsys):
     assert labels[:3] == ["body:tip.x [m]", "body:tip.y [m]", "body:tip.theta [rad]"]
     assert labels[3] == "beam:beam.node[0].x [m]" and labels[-1] == "beam:beam.node[6].slope_y [-]"
     assert list(npz["work_labels"]) == ["dissipated [J]", "external [J]", "constraint [J]"]
+    units = json.loads(str(npz["units"]))  # a unit for every array of the file
+    assert set(units) == set(npz.files) - {"units"}
+    assert "unspecified" not in units.values()
+    assert units["t"] == "s" and units["work"] == "J" and "coordinate_labels" in units["q"]
+    assert "per s" in units["v"] and "constraint_labels" in units["lam"]
+    assert units["stress_sigma"] == units["sigma_e1_mid"] == "Pa" and units["stress_s"] == units["tip"] == "m"
     for name in ("m1_n6.npz", "fig5_shapes.png", "fig6_tip_displacement.png",
                  "fig7_stress_e1_mid.png", "fig8_stress_map.png"):
         assert (out / name).stat().st_size > 0
