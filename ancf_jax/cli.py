@@ -152,7 +152,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     static = sub.add_parser("static", help="static equilibrium (sliding joints held)")
     common(static, "element count of the (single) beam")
-    static.add_argument("--json", action="store_true", help="print one JSON object")
+    static.add_argument("--json", action="store_true",
+                        help="print one JSON object: keys with their unit (tip_y_m, sigma_e1_mid_Pa) and units")
 
     modal = sub.add_parser("modal", help="natural frequencies [Hz]",
                            description="Natural frequencies [Hz] of the model linearized about its initial "
@@ -521,7 +522,7 @@ def _run(args) -> int:
         summary = report_m1(r, out, figures=figures, outputs=base.outputs,
                             precision=base.spec.outputs.precision)
         print(f"M1, {summary['elements']} elements, {r.solver}, dt = {r.dt:g} s: tip y min "
-              f"{summary['tip_y_min']:.6f} m, max |sigma_e1_mid| {summary['max_abs_sigma_e1_mid'] / 1e6:.2f} MPa; "
+              f"{summary['tip_y_min_m']:.6f} m, max |sigma_e1_mid| {summary['max_abs_sigma_e1_mid_Pa'] / 1e6:.2f} MPa; "
               f"compile {r.compile_time_s:.1f} s, run {r.wall_time_s:.2f} s -> {out}/")
     elif base.name == "m2" and all(isinstance(k, int) for k in runs):
         summary = report_m2(runs, out, figures=figures, animate=args.animate, outputs=base.outputs,
@@ -598,7 +599,7 @@ def _fatigue(args) -> int:
     hs = data["hot_spot"]
     life = data["life_repeats"]
     print(f"{base.name}: fatigue by {settings.method} over {res.duration:g} s at {len(res.s)} points: max damage "
-          f"{data['max_damage']:.3g} per run at {hs['beam']} s = {hs['s']:.4g} m ({hs['fibre']}), life "
+          f"{data['max_damage']:.3g} per run at {hs['beam']} s = {hs['s_m']:.4g} m ({hs['fibre']}), life "
           f"{'infinite' if life is None else f'{life:.3g} runs'}; compile {r.compile_time_s:.1f} s, run "
           f"{r.wall_time_s:.2f} s -> {out}/")
     if r.status != "ok":
@@ -646,7 +647,7 @@ def _fatigue_study(args, base, sc, settings) -> int:
     for v, d, hs, g, c in zip(res.values, res.max_damage, res.hot_spot, res.max_damage_gradient(), res.status):
         vals = ", ".join(f"{n} = {x:.6g}" for n, x in zip(res.names, v))
         grads = ", ".join(f"dD/d{n} = {x:.3g}" for n, x in zip(res.names, g))
-        print(f"{base.name}: {vals}: max damage {d:.4g} per run (Dirlik) at {hs['beam']} s = {hs['s']:.4g} m; "
+        print(f"{base.name}: {vals}: max damage {d:.4g} per run (Dirlik) at {hs['beam']} s = {hs['s_m']:.4g} m; "
               f"{grads}" + ("" if c == 0 else " (run failed: see study.csv)"))
     print(f"-> {out}/study.csv, study.json")
     return 0 if (res.status == 0).all() else 1
@@ -685,40 +686,46 @@ def _sweep(args) -> int:
     return 0 if counts.get("ok", 0) == len(status) else 1
 
 
-def _static_data(sc):
-    """Equilibrium quantities; M1 and M2 report the keys of their command contracts."""
+def _static_data(sc) -> tuple[dict, dict]:
+    """Equilibrium quantities and their units ({name: value}, {name: unit}); M1 and M2
+    report the quantities of their command contracts, other scenarios their output
+    columns."""
     import numpy as np
 
     from .outputs import evaluate
     res = sc.static_results()
     cols = {k: float(v[0]) for k, v in evaluate(res, sc.outputs).items() if k != "t"}
+    units = {o.name: o.unit for o in sc.outputs}
     system, q = res.system, res.q[0]
     if sc.name == "m1":
         n = int(system.beams[0].mesh.n_elements)
         tip = np.asarray(system.beam_nodes(q, 0))[n]
-        return dict(tip_x=cols["tip_x"], tip_y=cols["tip_y"],
+        data = dict(tip_x=cols["tip_x"], tip_y=cols["tip_y"],
                     tip_rotation=float(math.atan2(tip[3], tip[2])), sigma_e1_mid=cols["sigma_e1_mid"])
+        return data, dict(units, tip_rotation="rad")
     if sc.name == "m2":
         lam = res.multipliers("A")[0]
-        return dict(point1_x=cols["point1_x"], point1_y=cols["point1_y"], rb2_x=cols["rb2_x"],
+        data = dict(point1_x=cols["point1_x"], point1_y=cols["point1_y"], rb2_x=cols["rb2_x"],
                     rb2_y=cols["rb2_y"], horizontal_tension=float(lam[0]))
-    return cols
+        return data, dict(units, horizontal_tension="N")
+    return cols, units
 
 
 def _static(args) -> int:
+    from .outputs import unit_suffix
     _, scs = _scenarios(args)
     sc = next(iter(scs.values()))
-    data = _static_data(sc)
-    if args.json:
-        print(json.dumps(data))
+    data, units = _static_data(sc)
+    if args.json:  # keys with their unit (tip_y_m, sigma_e1_mid_Pa) and the units map
+        keyed = {f"{k}{unit_suffix(units[k])}": (v, units[k]) for k, v in data.items()}
+        print(json.dumps({**{k: v for k, (v, _) in keyed.items()}, "units": {k: u for k, (_, u) in keyed.items()}}))
         return 0
     n = ", ".join(f"{b}: {k} elements" for b, k in sc.beam_elements.items())
     title = {"m1": "M1 static equilibrium under gravity",
              "m2": "M2 held equilibrium (trolley held at s0)"}.get(sc.name, f"{sc.name} static equilibrium")
     print(f"{title} ({n}):")
-    units = dict(tip_rotation="rad", sigma_e1_mid="Pa", horizontal_tension="N")
     for k, v in data.items():
-        print(f"  {k:20s} {v: .9g} {units.get(k, 'm' if k.endswith(('_x', '_y')) else '')}")
+        print(f"  {k:20s} {v: .9g} {'' if units[k] == '-' else units[k]}")
     return 0
 
 
@@ -785,7 +792,8 @@ def _check_identification_size(args, elements):
     extra = [] if args.dt is None else [f"solver.dt={args.dt!r}", f"outputs.dt={args.dt!r}"]
     sc = _load(args.model, list(args.overrides) + extra)
     if elements is not None and len(sc.beam_elements) == 1:
-        sc = _load(args.model, list(args.overrides) + extra + [f"beams.{next(iter(sc.beam_elements))}.elements={elements}"])
+        beam = next(iter(sc.beam_elements))
+        sc = _load(args.model, list(args.overrides) + extra + [f"beams.{beam}.elements={elements}"])
     run = sc.solver
     settings = types.SimpleNamespace(t_end=run.t_end if args.t_end is None else args.t_end, dt=run.dt,
                                      output_dt=run.dt, solver=run.solver)

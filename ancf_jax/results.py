@@ -459,10 +459,13 @@ class Results:
         return viol[:, 0], viol[:, 1]
 
     def summary(self) -> dict[str, Any]:
-        """Diagnostics of the run as a JSON-ready dict."""
+        """Diagnostics of the run as a JSON-ready dict; keys of dimensional scalars carry
+        their unit (``dt_s``, ``t_end_s``, ``failure_time_s``, ``wall_time_s``);
+        ``max_constraint_violation`` is in the units of the constraint equations (m for
+        positions, - for slopes), ``energy_balance_error`` relative."""
         pos, vel = self.constraint_violation()
-        return dict(solver=self.solver, dt=self.dt, t_end=float(self.t[-1]), outputs=len(self.t),
-                    status=self.status, failure_time=self.failure_time,
+        return dict(solver=self.solver, dt_s=self.dt, t_end_s=float(self.t[-1]), outputs=len(self.t),
+                    status=self.status, failure_time_s=self.failure_time,
                     wall_time_s=self.wall_time_s, compile_time_s=self.compile_time_s,
                     newton_iterations=int(self.iterations.sum()),
                     max_constraint_violation=float(pos.max()),
