@@ -26,7 +26,7 @@ import sys
 from pathlib import Path
 
 from ._version import __version__
-from .errors import StaticsError
+from .errors import ModelError, StaticsError
 
 class _Parser(argparse.ArgumentParser):
     """argparse with one-line errors: ``ancf-jax run: error: argument --t-end: ...``."""
@@ -128,7 +128,9 @@ def build_parser() -> argparse.ArgumentParser:
     common(run, "element count of the (single) beam; comma-separated counts run as one vmapped "
                 "batch (m1 default 6, m2 default 12,18,24)")
     run.add_argument("--t-end", type=_positive_float, default=None, help="end time [s]")
-    run.add_argument("--dt", type=_positive_float, default=None, help="time step [s]")
+    run.add_argument("--dt", type=_positive_float, default=None,
+                     help="time step [s] (without --output-dt, a shorter output step of the scenario is "
+                          "raised to it, with a note)")
     run.add_argument("--output-dt", type=_positive_float, default=None, help="output interval [s]")
     run.add_argument("--solver", choices=SOLVERS, default=None, help="integrator")
     run.add_argument("--rho-inf", type=_nonnegative_float, default=None,
@@ -150,9 +152,15 @@ def build_parser() -> argparse.ArgumentParser:
 
     static = sub.add_parser("static", help="static equilibrium (sliding joints held)")
     common(static, "element count of the (single) beam")
-    static.add_argument("--json", action="store_true", help="print one JSON object")
+    static.add_argument("--json", action="store_true",
+                        help="print one JSON object: keys with their unit (tip_y_m, sigma_e1_mid_Pa) and units")
 
-    modal = sub.add_parser("modal", help="natural frequencies [Hz]")
+    modal = sub.add_parser("modal", help="natural frequencies [Hz]",
+                           description="Natural frequencies [Hz] of the model linearized about its initial "
+                                       "state or its static equilibrium. A negative frequency (-sqrt(-omega^2)/2pi) "
+                                       "marks omega^2 < 0: the configuration is unstable about the chosen state "
+                                       "(e.g. a slack cable in its reference shape; try --about equilibrium); a "
+                                       "note says so (the key note with --json).")
     common(modal, "element count of the (single) beam")
     modal.add_argument("--about", choices=tuple(_ABOUT), default=None,
                        help="linearize about the initial state or the static equilibrium (with the "
@@ -160,7 +168,8 @@ def build_parser() -> argparse.ArgumentParser:
                             "equilibrium (default: the scenario's modal.about)")
     modal.add_argument("--modes", type=_positive_int, default=None,
                        help="number of lowest modes (default: the scenario's modal.modes)")
-    modal.add_argument("--json", action="store_true", help='print {"frequencies_hz": [...]}')
+    modal.add_argument("--json", action="store_true",
+                       help='print {"frequencies_hz": [...]} (and "note" when a frequency is negative)')
 
     fatigue = sub.add_parser("fatigue", help="fatigue damage and life along the beams of a run",
                              description="Simulate a model with its scenario settings and assess fatigue "
@@ -170,7 +179,8 @@ def build_parser() -> argparse.ArgumentParser:
                                          "figures (default directory results/MODEL-fatigue).")
     common(fatigue, "element count of the (single) beam")
     fatigue.add_argument("--t-end", type=_positive_float, default=None, help="end time [s]")
-    fatigue.add_argument("--dt", type=_positive_float, default=None, help="time step [s]")
+    fatigue.add_argument("--dt", type=_positive_float, default=None,
+                         help="time step [s] (a shorter output step of the scenario is raised to it, with a note)")
     fatigue.add_argument("--out", type=Path, default=None, help="output directory (default results/MODEL-fatigue)")
     fatigue.add_argument("--max-steps", type=_positive_int, default=None,
                          help=f"the most time steps accepted (default {MAX_STEPS:.0e})")
@@ -185,12 +195,16 @@ def build_parser() -> argparse.ArgumentParser:
     check = sub.add_parser("check", help="validate a scenario without running it",
                            description="Validate a scenario without running it: the file, the joints "
                                        "(redundant or conflicting, from the rank of the constraint "
-                                       "Jacobian at the initial state) and the time functions on the "
-                                       "output time grid; prints a summary.")
+                                       "Jacobian at the initial state), the time functions on the "
+                                       "run's step and output time grids and the size of the run "
+                                       "(time steps, output; --max-steps); prints a summary.")
     check.add_argument("model", metavar="MODEL", help="shipped scenario name, FILE.toml or FILE.json")
     check.add_argument("--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
                        help="override a scenario key before validating it (dotted path, TOML value, "
                             "e.g. solver.dt=1e-4), as run does; repeatable")
+    check.add_argument("--max-steps", type=_positive_int, default=None,
+                       help=f"the most time steps accepted, as for run (default {MAX_STEPS:.0e}): a longer "
+                            "run is refused here as run would refuse it")
 
     synth = sub.add_parser("synth", help="synthetic measurements t,y of a model output (noisy)",
                            description="Simulate a model with given Rayleigh coefficients and write "
@@ -210,6 +224,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="solver step [s] (default: the scenario's solver.dt)")
     synth.add_argument("--seed", type=_nonnegative_int, default=0, help="seed of the noise (default 0)")
     synth.add_argument("--output", default="tip_y", help="output column to sample (default tip_y)")
+    synth.add_argument("--max-steps", type=_positive_int, default=None,
+                       help=f"the most time steps accepted (default {MAX_STEPS:.0e}; a longer run is "
+                            "refused before compiling)")
     synth.add_argument("--out", type=Path, required=True, help="CSV file to write")
 
     sweep = sub.add_parser("sweep", help="parameter sweep into a Zarr store (local devices or Ray)",
@@ -264,6 +281,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="nuisance parameters of the measurement fitted with the others, comma-separated: "
                           "time_offset (trigger delay: the record's t is the model's t + tau), offset, gain "
                           "(the sensor reads gain * y + offset); default none")
+    fit.add_argument("--max-steps", type=_positive_int, default=None,
+                     help=f"the most time steps of one simulation accepted (default {MAX_STEPS:.0e}; a "
+                          "longer one is refused before compiling)")
     fit.add_argument("--max-time-offset", type=_positive_float, default=None,
                      help="bound |tau| on a fitted time offset [s] (default 0.05)")
     fit.add_argument("--noise", type=_positive_float, default=None,
@@ -341,6 +361,33 @@ def _check_size(args, scs, settings):
             raise _UsageError(str(e)) from None
 
 
+def _output_step_for(args, command: str, overrides) -> list[str]:
+    """``--dt`` without ``--output-dt``: when the scenario's output step (``outputs.dt``,
+    after ``overrides``) is shorter than ``--dt``, raise it to ``--dt`` and say so in one
+    line on stderr (outputs are taken at steps, so a shorter one cannot be kept). Returns
+    the override to add (none when nothing changes or ``outputs.dt`` is set with --set)."""
+    if args.dt is None or getattr(args, "output_dt", None) is not None:
+        return []
+    if any(item.partition("=")[0].strip() == "outputs.dt" for item in overrides):
+        return []  # asked for explicitly: the scenario check names it if it conflicts
+    from .scenario.loader import _parse, apply_overrides, resolve
+    try:  # the raw file with the overrides; its errors are reported by the full load
+        path = resolve(args.model)
+        data = _parse(str(path), path, path.read_text(encoding="utf-8"))
+        apply_overrides(data, overrides, str(path))
+        out_dt = float(data.get("outputs", {}).get("dt"))
+    except Exception:  # noqa: BLE001 - no outputs.dt, or a file the full load refuses
+        return []
+    if not (math.isfinite(out_dt) and out_dt < args.dt * (1 - 1e-9)):
+        return []
+    print(f"ancf-jax {command}: note: the scenario's output step outputs.dt = {out_dt:g} s is shorter than "
+          f"--dt = {args.dt:g} s: outputs every {args.dt:g} s (give --output-dt to choose another)"
+          if command == "run" else
+          f"ancf-jax {command}: note: the scenario's output step outputs.dt = {out_dt:g} s is shorter than "
+          f"--dt = {args.dt:g} s: outputs every {args.dt:g} s", file=sys.stderr)
+    return [f"outputs.dt={args.dt!r}"]
+
+
 def _load(source, overrides):
     from .scenario import ScenarioError, load_scenario
     try:
@@ -404,12 +451,15 @@ def _continue(args, scs, kw) -> dict:
     from .simulation import load_checkpoint, simulate
     if len(scs) != 1:
         raise _UsageError("argument --continue-from: continues one run (give one element count)")
+    (label, sc), = scs.items()
+    try:
+        system, _ = sc.build()
+    except ModelError as e:  # e.g. conflicting joints: the model's error, not the file's
+        raise _UsageError(f"{sc.path}: {e}") from None
     try:
         checkpoint = load_checkpoint(args.continue_from)
     except (OSError, ValueError, KeyError, ModelError) as e:
         raise _UsageError(f"argument --continue-from: {e}") from None
-    (label, sc), = scs.items()
-    system, _ = sc.build()
     if tuple(checkpoint.q.shape) != (system.n_coordinates,):
         raise _UsageError(f"argument --continue-from: {args.continue_from} holds {checkpoint.q.shape[0]} "
                           f"coordinates, the model {system.n_coordinates}; give the model, --elements and "
@@ -444,7 +494,11 @@ def _run(args) -> int:
     if args.solver is not None:
         extra.append(f'solver.name="{args.solver}"')
     if args.output_dt is not None:
+        if args.dt is not None and args.output_dt < args.dt * (1 - 1e-9):
+            raise _UsageError(f"argument --output-dt: {args.output_dt:g} s is shorter than --dt = {args.dt:g} s "
+                              f"(accepted: a number >= {args.dt:g} [s]; outputs are taken at steps)")
         extra.append(f"outputs.dt={args.output_dt!r}")
+    extra += _output_step_for(args, "run", list(args.overrides) + extra)
     if args.rho_inf is not None:
         if args.rho_inf > 1.0:
             raise _UsageError(f"argument --rho-inf: must be in [0, 1], got {args.rho_inf}")
@@ -468,7 +522,7 @@ def _run(args) -> int:
         summary = report_m1(r, out, figures=figures, outputs=base.outputs,
                             precision=base.spec.outputs.precision)
         print(f"M1, {summary['elements']} elements, {r.solver}, dt = {r.dt:g} s: tip y min "
-              f"{summary['tip_y_min']:.6f} m, max |sigma_e1_mid| {summary['max_abs_sigma_e1_mid'] / 1e6:.2f} MPa; "
+              f"{summary['tip_y_min_m']:.6f} m, max |sigma_e1_mid| {summary['max_abs_sigma_e1_mid_Pa'] / 1e6:.2f} MPa; "
               f"compile {r.compile_time_s:.1f} s, run {r.wall_time_s:.2f} s -> {out}/")
     elif base.name == "m2" and all(isinstance(k, int) for k in runs):
         summary = report_m2(runs, out, figures=figures, animate=args.animate, outputs=base.outputs,
@@ -513,6 +567,7 @@ def _fatigue(args) -> int:
     from .errors import ModelError
     from .fatigue import analyse, settings_from_table
     extra = [f"solver.{k}={v!r}" for k, v in (("t_end", args.t_end), ("dt", args.dt)) if v is not None]
+    extra += _output_step_for(args, "fatigue", list(args.overrides) + extra)
     if args.out is not None:
         _check_out(args.out)
     base, scs = _scenarios(args, extra=extra)
@@ -544,7 +599,7 @@ def _fatigue(args) -> int:
     hs = data["hot_spot"]
     life = data["life_repeats"]
     print(f"{base.name}: fatigue by {settings.method} over {res.duration:g} s at {len(res.s)} points: max damage "
-          f"{data['max_damage']:.3g} per run at {hs['beam']} s = {hs['s']:.4g} m ({hs['fibre']}), life "
+          f"{data['max_damage']:.3g} per run at {hs['beam']} s = {hs['s_m']:.4g} m ({hs['fibre']}), life "
           f"{'infinite' if life is None else f'{life:.3g} runs'}; compile {r.compile_time_s:.1f} s, run "
           f"{r.wall_time_s:.2f} s -> {out}/")
     if r.status != "ok":
@@ -592,13 +647,17 @@ def _fatigue_study(args, base, sc, settings) -> int:
     for v, d, hs, g, c in zip(res.values, res.max_damage, res.hot_spot, res.max_damage_gradient(), res.status):
         vals = ", ".join(f"{n} = {x:.6g}" for n, x in zip(res.names, v))
         grads = ", ".join(f"dD/d{n} = {x:.3g}" for n, x in zip(res.names, g))
-        print(f"{base.name}: {vals}: max damage {d:.4g} per run (Dirlik) at {hs['beam']} s = {hs['s']:.4g} m; "
+        print(f"{base.name}: {vals}: max damage {d:.4g} per run (Dirlik) at {hs['beam']} s = {hs['s_m']:.4g} m; "
               f"{grads}" + ("" if c == 0 else " (run failed: see study.csv)"))
     print(f"-> {out}/study.csv, study.json")
     return 0 if (res.status == 0).all() else 1
 
 
 def _sweep(args) -> int:
+    # the store and the NetCDF file: checked before anything is imported, built or run
+    _check_out(args.out)
+    if args.netcdf is not None:
+        _check_out(args.netcdf, "--netcdf", file=True)
     try:
         from .sweep import SweepError, parse_param, run_sweep
         from .sweep.store import to_netcdf
@@ -627,40 +686,46 @@ def _sweep(args) -> int:
     return 0 if counts.get("ok", 0) == len(status) else 1
 
 
-def _static_data(sc):
-    """Equilibrium quantities; M1 and M2 report the keys of their command contracts."""
+def _static_data(sc) -> tuple[dict, dict]:
+    """Equilibrium quantities and their units ({name: value}, {name: unit}); M1 and M2
+    report the quantities of their command contracts, other scenarios their output
+    columns."""
     import numpy as np
 
     from .outputs import evaluate
     res = sc.static_results()
     cols = {k: float(v[0]) for k, v in evaluate(res, sc.outputs).items() if k != "t"}
+    units = {o.name: o.unit for o in sc.outputs}
     system, q = res.system, res.q[0]
     if sc.name == "m1":
         n = int(system.beams[0].mesh.n_elements)
         tip = np.asarray(system.beam_nodes(q, 0))[n]
-        return dict(tip_x=cols["tip_x"], tip_y=cols["tip_y"],
+        data = dict(tip_x=cols["tip_x"], tip_y=cols["tip_y"],
                     tip_rotation=float(math.atan2(tip[3], tip[2])), sigma_e1_mid=cols["sigma_e1_mid"])
+        return data, dict(units, tip_rotation="rad")
     if sc.name == "m2":
         lam = res.multipliers("A")[0]
-        return dict(point1_x=cols["point1_x"], point1_y=cols["point1_y"], rb2_x=cols["rb2_x"],
+        data = dict(point1_x=cols["point1_x"], point1_y=cols["point1_y"], rb2_x=cols["rb2_x"],
                     rb2_y=cols["rb2_y"], horizontal_tension=float(lam[0]))
-    return cols
+        return data, dict(units, horizontal_tension="N")
+    return cols, units
 
 
 def _static(args) -> int:
+    from .outputs import unit_suffix
     _, scs = _scenarios(args)
     sc = next(iter(scs.values()))
-    data = _static_data(sc)
-    if args.json:
-        print(json.dumps(data))
+    data, units = _static_data(sc)
+    if args.json:  # keys with their unit (tip_y_m, sigma_e1_mid_Pa) and the units map
+        keyed = {f"{k}{unit_suffix(units[k])}": (v, units[k]) for k, v in data.items()}
+        print(json.dumps({**{k: v for k, (v, _) in keyed.items()}, "units": {k: u for k, (_, u) in keyed.items()}}))
         return 0
     n = ", ".join(f"{b}: {k} elements" for b, k in sc.beam_elements.items())
     title = {"m1": "M1 static equilibrium under gravity",
              "m2": "M2 held equilibrium (trolley held at s0)"}.get(sc.name, f"{sc.name} static equilibrium")
     print(f"{title} ({n}):")
-    units = dict(tip_rotation="rad", sigma_e1_mid="Pa", horizontal_tension="N")
     for k, v in data.items():
-        print(f"  {k:20s} {v: .9g} {units.get(k, 'm' if k.endswith(('_x', '_y')) else '')}")
+        print(f"  {k:20s} {v: .9g} {'' if units[k] == '-' else units[k]}")
     return 0
 
 
@@ -683,25 +748,56 @@ def _modal(args) -> int:
                           f"freedom (accepted: an integer 1 .. {dof})")
     res = modal_analysis(system, q, lam, n_modes=modes)
     freqs = [float(f) for f in res.frequencies_hz]
+    note = _negative_frequency_note(freqs, about)
     if args.json:
-        print(json.dumps({"frequencies_hz": freqs}))
+        print(json.dumps({"frequencies_hz": freqs, **({"note": note} if note else {})}))
     else:
         n = ", ".join(f"{b}: {k} elements" for b, k in sc.beam_elements.items())
         print(f"{sc.name} natural frequencies about the {about} {'state' if about == 'initial' else 'configuration'} ({n}):")
         for i, f in enumerate(freqs, 1):
             print(f"  mode {i:2d}: {f:14.6f} Hz")
+        if note:
+            print(f"note: {note}")
     return 0
+
+
+def _negative_frequency_note(freqs, about: str) -> str | None:
+    """One line explaining negative frequencies (ω² < 0), None when there are none."""
+    count = sum(f < 0.0 for f in freqs)
+    if not count:
+        return None
+    where = ("about the initial state, e.g. a slack or sagging cable in its reference shape: use "
+             "--about equilibrium (the static equilibrium, with its stress stiffness)" if about == "initial" else
+             "about the static equilibrium: it is not a stable one (a buckled or slack configuration)")
+    return (f"{count} negative frequenc{'y' if count == 1 else 'ies'} (-sqrt(-omega^2)/2pi where omega^2 < 0): the "
+            f"configuration is unstable {where}")
 
 
 def _check(args) -> int:
     from .errors import ModelError
     sc = _load(args.model, args.overrides)
+    _check_size(args, {"": sc}, sc.solver)  # what run refuses as too long, check refuses too
     try:  # the joints: rank of the constraint Jacobian at the initial state, assembly
         sc.model().build()
     except ModelError as e:
-        raise _UsageError(f"{sc.path}: joints: {e}") from None
+        raise _UsageError(f"{sc.path}: {e}") from None
     print(sc.summary())
     return 0
+
+
+def _check_identification_size(args, elements):
+    """The run-size check of ``synth``/``fit`` (their simulation outputs every step),
+    from the scenario as :meth:`~ancf_jax.identification.Problem.from_scenario` reads it."""
+    import types
+    extra = [] if args.dt is None else [f"solver.dt={args.dt!r}", f"outputs.dt={args.dt!r}"]
+    sc = _load(args.model, list(args.overrides) + extra)
+    if elements is not None and len(sc.beam_elements) == 1:
+        beam = next(iter(sc.beam_elements))
+        sc = _load(args.model, list(args.overrides) + extra + [f"beams.{beam}.elements={elements}"])
+    run = sc.solver
+    settings = types.SimpleNamespace(t_end=run.t_end if args.t_end is None else args.t_end, dt=run.dt,
+                                     output_dt=run.dt, solver=run.solver)
+    _check_size(args, {"": sc}, settings)
 
 
 def _identification_problem(args, params, nuisance=()):
@@ -715,6 +811,7 @@ def _identification_problem(args, params, nuisance=()):
             elements = _positive_int(args.elements)
         except argparse.ArgumentTypeError as e:
             raise _UsageError(f"argument --elements: {e}") from None
+    _check_identification_size(args, elements)
     try:
         extra = {}
         if nuisance:
@@ -835,6 +932,18 @@ def _fit(args) -> int:
     return 0 if all(r.converged for r in results) else 1
 
 
+def _model_path(args) -> str:
+    """``"FILE: "`` of the command's scenario for a message (``""`` when it cannot be named)."""
+    model = getattr(args, "model", None)
+    if model is None:
+        return ""
+    try:
+        from .scenario.loader import resolve
+        return f"{resolve(model)}: "
+    except Exception:  # noqa: BLE001 - only for the message
+        return f"{model}: "
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``ancf-jax``: parse ``argv`` (default ``sys.argv[1:]``), run the
     command and return the exit status (0 ok, 1 failed run, 2 bad input, 130
@@ -849,6 +958,9 @@ def main(argv: list[str] | None = None) -> int:
                 "fit": _fit, "fatigue": _fatigue, "sweep": _sweep}[args.command](args)
     except _UsageError as e:
         print(f"ancf-jax {args.command}: error: {e}", file=sys.stderr)
+        return 2
+    except ModelError as e:  # bad model input found while building (e.g. conflicting joints), before compiling
+        print(f"ancf-jax {args.command}: error: {_model_path(args)}{e}", file=sys.stderr)
         return 2
     except StaticsError as e:  # a static equilibrium (the command's, or a run's initial state) not found
         print(f"ancf-jax {args.command}: {e}", file=sys.stderr)

@@ -91,6 +91,17 @@ def beam_point(beam: str, s: float) -> PointRef:
     return PointRef("beam", beam, check_nonnegative(f"arc length s on beam {beam!r}", s, "m"))
 
 
+def describe_point(ref: PointRef) -> str:
+    """A point reference in words, for messages: ``node -1 of beam 'arm'``."""
+    if ref.kind == "ground":
+        return f"ground point {tuple(ref.value)}"
+    if ref.kind == "body":
+        return f"body {ref.target!r}" + ("" if tuple(ref.value) == (0.0, 0.0) else f" at local {tuple(ref.value)}")
+    if ref.kind == "node":
+        return f"node {ref.value} of beam {ref.target!r}"
+    return f"s = {ref.value:g} m on beam {ref.target!r}"
+
+
 #: clamp modes (:class:`ancf_jax.joints.Clamp`)
 CLAMP_MODES = ("full", "direction", "exudyn")
 #: coordinates of a beam node and of a body, in the order of q (:meth:`Model.coordinate`)
@@ -360,8 +371,11 @@ class Model:
     def fixed(self, name: str, point: PointRef, body: str, local=None) -> str:
         """Fixed joint of a beam node (or body point) to rigid body ``body``.
 
-        The body point ``local`` (default: where ``point`` initially is, in the body
-        frame) stays at ``point`` and the body rotates with the beam slope there.
+        The body point ``local`` [m] (body frame) stays at ``point`` and the body rotates
+        with the beam slope there. Without ``local``, the body's centre must start at
+        ``point`` (within 1e-9 of the model's size): a body placed elsewhere would be
+        welded on through an invisible rigid arm, so :meth:`build` refuses it; give
+        ``local`` (the body point at the joint) for an intended arm.
         """
         loc = None if local is None else tuple(check_vector(f"local point of joint {name!r}", local, 2))
         self._claim(name, "joint")
@@ -521,7 +535,9 @@ class Model:
     def spring_damper(self, name: str, a: PointRef, b: PointRef, *, stiffness, damping=0.0,
                       rest_length=None, acts: str = "both") -> str:
         """Linear spring-damper between two points; rest length defaults to the
-        initial distance.
+        initial distance. The two points must be apart at the initial state (at zero
+        length the spring's direction, the gradient of its length, is undefined):
+        :meth:`build` refuses coinciding ends.
 
         ``acts``: ``"both"`` (default, :class:`~ancf_jax.forces.SpringDamper`),
         ``"tension"`` (a rope, dropper or hanger: slack while shorter than the rest
@@ -532,6 +548,9 @@ class Model:
         c = check_nonnegative(f"damping of {name!r}", damping, "N*s/m")
         l0 = None if rest_length is None else check_nonnegative(f"rest_length of {name!r}", rest_length, "m")
         check_choice(f"acts of spring-damper {name!r}", acts, ("both", "tension", "compression"))
+        if isinstance(a, PointRef) and a == b:
+            raise ModelError(f"spring-damper {name!r}: both ends are {describe_point(a)}: its length is 0, where "
+                             "its direction (the gradient of the length) is undefined; join two different points")
         self._claim(name, "force")
         self._forces.append(("spring_damper", name, dict(a=a, b=b, stiffness=k, damping=c, rest_length=l0,
                                                          acts=acts)))
@@ -953,6 +972,11 @@ class Model:
         def initial_direction(pt):
             return np.asarray(pt.direction(skeleton, jnp.asarray(q0)))
 
+        # the model's size, for tolerances of initial distances (points that must coincide)
+        size = max([float(np.max(np.abs(x[:, :2]))) for x in nodes0 if x.size]
+                   + [float(np.max(np.abs(poses[:, :2]))) if poses.size else 0.0])
+        coincide = 1e-9 * size + 1e-12
+
         # ---- constraints
         constraints = []
         for kind, name, a in self._joints:
@@ -976,8 +1000,14 @@ class Model:
                 pose = poses[k]
                 c, s = np.cos(pose[2]), np.sin(pose[2])
                 rot_t = np.array([[c, s], [-s, c]])
-                local = (rot_t @ (initial_position(pt) - pose[:2]) if a["local"] is None
-                         else np.asarray(a["local"]))
+                arm = initial_position(pt) - pose[:2]
+                if a["local"] is None and np.linalg.norm(arm) > coincide:
+                    raise ModelError(
+                        f"fixed joint {name!r}: body {a['body']!r} starts {np.linalg.norm(arm):.4g} m from "
+                        f"{describe_point(a['point'])}, where the joint holds it; without local it would be welded "
+                        "on through an invisible rigid arm: place the body at the point, or give local (the body "
+                        "point at the joint, in the body frame) for an intended arm")
+                local = rot_t @ arm if a["local"] is None else np.asarray(a["local"])
                 d = initial_direction(pt)
                 u0 = rot_t @ (d / np.linalg.norm(d))
                 constraints.append(J.FixedJoint(name, pt, P.BodyPoint(k, jnp.asarray(local, float)),
@@ -1035,9 +1065,15 @@ class Model:
                                           a["time_function"]))
             elif kind == "spring_damper":
                 pa, pb = resolve(a["a"], what), resolve(a["b"], what)
+                length = float(np.linalg.norm(initial_position(pa) - initial_position(pb)))
+                if length <= coincide:
+                    raise ModelError(
+                        f"spring-damper {name!r}: its ends ({describe_point(a['a'])} and {describe_point(a['b'])}) "
+                        f"coincide at the initial state (length {length:.3g} m), where its direction (the gradient "
+                        "of the length) is undefined; join points that start apart")
                 l0 = a["rest_length"]
                 if l0 is None:
-                    l0 = float(np.linalg.norm(initial_position(pa) - initial_position(pb)))
+                    l0 = length
                 law = {"both": SpringDamper, "tension": TensionOnlySpringDamper,
                        "compression": CompressionOnlySpringDamper}[a["acts"]]
                 forces.append(law(name, pa, pb, jnp.asarray(a["stiffness"], float),

@@ -143,6 +143,20 @@ class Output:
                              f"derivatives exist for {', '.join(DIFFERENTIABLE_KINDS)}")
 
 
+def unit_suffix(unit: str) -> str:
+    """The suffix of a JSON key holding a scalar in ``unit`` (the units convention of
+    every output file: ``max_abs_sigma_e1_mid_Pa``, ``tip_y_min_m``, ``dt_s``): ``"_Pa"``,
+    ``"_m"``, ``"_N"``, ``"_Nm"`` (N*m), ``"_per_m"`` (1/m), ``"_m_per_s2"`` (m/s^2); ``""``
+    for a dimensionless (``"-"``) or mixed unit (``"N or N*m"``), whose key the file's
+    ``units`` map then explains."""
+    u = unit.replace("*", "").replace("·", "").replace("^", "").replace("²", "2").strip()
+    if u in ("", "-") or " " in u:
+        return ""
+    num, _, den = u.partition("/")
+    num = "" if num == "1" else num
+    return f"_{num}" + (f"{'_' if num else ''}per_{den}" if den else "")
+
+
 def output_units(outputs: Iterable[Output]) -> dict[str, str]:
     """Units of the columns of :func:`evaluate` (``t`` first), for the ``units`` map
     that accompanies every output file."""

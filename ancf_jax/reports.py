@@ -2,6 +2,12 @@
 
 Every report writes CSV (the named outputs), NPZ (full histories), ``summary.json``
 and figures into an output directory, and returns the summary dict.
+
+Units: CSV headers are bare column names; ``summary.json`` has ``units`` ({column:
+unit}) and the keys of its dimensional scalars end in their unit
+(:func:`~ancf_jax.outputs.unit_suffix`: ``max_abs_sigma_e1_mid_Pa``, ``tip_y_min_m``,
+``dt_s``; a column's ``{name}_min``/``_max`` carry the column's unit, none when it is
+dimensionless); NPZ files hold ``units`` ({array: unit}, JSON text).
 """
 
 from __future__ import annotations
@@ -15,7 +21,7 @@ import numpy as np
 from . import plotting
 from .models import m1 as m1_def
 from .models import m2 as m2_def
-from .outputs import evaluate, output_units, write_csv
+from .outputs import evaluate, output_units, unit_suffix, write_csv
 from .results import Results
 
 
@@ -41,17 +47,19 @@ def report_m1(results: Results, out_dir: str | Path, *, figures: bool = True,
     s, sigma = results.stress_along("beam", 11)
     results.save_npz(out / f"m1_n{n}.npz", stress_s=s, stress_sigma=sigma,
                      sigma_e1_mid=cols["sigma_e1_mid"], sigma_e1_mid_small_strain=sig_approx,
-                     tip=np.column_stack([cols["tip_x"], cols["tip_y"]]))
+                     tip=np.column_stack([cols["tip_x"], cols["tip_y"]]),
+                     units=dict(stress_s="m", stress_sigma="Pa", sigma_e1_mid="Pa",
+                                sigma_e1_mid_small_strain="Pa", tip="m"))
     base = results.summary()
-    summary = dict(model="m1", elements=n, solver=results.solver, dt=results.dt,
-                   t_end=float(results.t[-1]), wall_time_s=results.wall_time_s,
+    summary = dict(model="m1", elements=n, solver=results.solver, dt_s=results.dt,
+                   t_end_s=float(results.t[-1]), wall_time_s=results.wall_time_s,
                    compile_time_s=results.compile_time_s,
-                   tip_y_min=float(np.min(cols["tip_y"])),
-                   tip_y_min_time=float(results.t[int(np.argmin(cols["tip_y"]))]),
-                   tip_y_final=float(cols["tip_y"][-1]),
-                   max_abs_sigma_e1_mid=float(np.max(np.abs(cols["sigma_e1_mid"]))),
-                   max_abs_sigma_e1_mid_small_strain=float(np.max(np.abs(sig_approx))),
-                   max_abs_stress_along_beam=float(np.nanmax(np.abs(sigma))),
+                   tip_y_min_m=float(np.min(cols["tip_y"])),
+                   tip_y_min_time_s=float(results.t[int(np.argmin(cols["tip_y"]))]),
+                   tip_y_final_m=float(cols["tip_y"][-1]),
+                   max_abs_sigma_e1_mid_Pa=float(np.max(np.abs(cols["sigma_e1_mid"]))),
+                   max_abs_sigma_e1_mid_small_strain_Pa=float(np.max(np.abs(sig_approx))),
+                   max_abs_stress_along_beam_Pa=float(np.nanmax(np.abs(sigma))),
                    max_constraint_violation=base["max_constraint_violation"],
                    max_velocity_constraint_violation=base["max_velocity_constraint_violation"],
                    energy_balance_error=base["energy_balance_error"],
@@ -99,20 +107,21 @@ def report_m2(runs: dict[int, Results], out_dir: str | Path, *, figures: bool = 
         reaction = r.sliding_reaction("slider")
         s, sigma = r.stress_along("cable", 11)
         r.save_npz(out / f"m2_n{n}.npz", stress_s=s, stress_sigma=sigma, sliding_reaction=reaction,
-                   **{k: v for k, v in cols.items() if k != "t"})
+                   **{k: v for k, v in cols.items() if k != "t"},
+                   units=dict(output_units(outputs), stress_s="m", stress_sigma="Pa", sliding_reaction="N"))
         base = r.summary()
         i_min = int(np.argmin(cols["point1_y"]))
         per[str(n)] = dict(elements=n, status=r.status, wall_time_s=r.wall_time_s,
                            compile_time_s=r.compile_time_s,
                            batch_wall_time_s=r.info.get("batch_wall_time_s", r.wall_time_s),
-                           point1_y_min=float(cols["point1_y"][i_min]),
-                           point1_y_min_time=float(r.t[i_min]),
-                           s_final=float(cols["s"][-1]),
+                           point1_y_min_m=float(cols["point1_y"][i_min]),
+                           point1_y_min_time_s=float(r.t[i_min]),
+                           s_final_m=float(cols["s"][-1]),
                            max_constraint_violation=base["max_constraint_violation"],
                            max_velocity_constraint_violation=base["max_velocity_constraint_violation"],
                            energy_balance_error=base["energy_balance_error"],
-                           max_abs_bending_stress=float(np.nanmax(np.abs(sigma))),
-                           max_abs_normal_reaction=float(np.max(np.abs(reaction[:, 0]))),
+                           max_abs_bending_stress_Pa=float(np.nanmax(np.abs(sigma))),
+                           max_abs_normal_reaction_N=float(np.max(np.abs(reaction[:, 0]))),
                            newton_iterations=base["newton_iterations"])
     distances = {}
     ref = counts[-1]
@@ -124,8 +133,8 @@ def report_m2(runs: dict[int, Results], out_dir: str | Path, *, figures: bool = 
                                           final_m=float(d[-1]),
                                           max_before_1_3s_m=float(d[cols_all[ref]["t"][:k] <= 1.3].max()))
     r0 = runs[counts[0]]
-    summary = dict(model="m2", element_counts=counts, solver=r0.solver, dt=r0.dt,
-                   t_end=float(r0.t[-1]), compile_time_s=r0.compile_time_s,
+    summary = dict(model="m2", element_counts=counts, solver=r0.solver, dt_s=r0.dt,
+                   t_end_s=float(r0.t[-1]), compile_time_s=r0.compile_time_s,
                    batch_wall_time_s=r0.info.get("batch_wall_time_s", sum(runs[n].wall_time_s for n in counts)),
                    runs=per, point1_distances=distances, units=output_units(outputs))
     _json(out / "summary.json", summary)
@@ -177,13 +186,15 @@ def report_scenario(name: str, runs: dict, outputs, out_dir: str | Path, *, figu
         for b in r.system.beam_names:
             s, sigma = r.stress_along(b, 11)
             extra[f"stress_s_{b}"], extra[f"stress_sigma_{b}"] = s, sigma
-        r.save_npz(out / f"{stem}.npz", **extra)
+        r.save_npz(out / f"{stem}.npz", **extra,
+                   units={k: "m" if k.startswith("stress_s_") else "Pa" for k in extra})
         base = r.summary()
         entry = dict(base)
-        entry.update({f"{k}_min": float(np.min(v)) for k, v in cols.items() if k != "t"})
-        entry.update({f"{k}_max": float(np.max(v)) for k, v in cols.items() if k != "t"})
-        entry["max_abs_bending_stress"] = {b: float(np.nanmax(np.abs(extra[f"stress_sigma_{b}"])))
-                                           for b in r.system.beam_names}
+        suffix = {o.name: unit_suffix(o.unit) for o in outputs}  # "": dimensionless, see units
+        entry.update({f"{k}_min{suffix[k]}": float(np.min(v)) for k, v in cols.items() if k != "t"})
+        entry.update({f"{k}_max{suffix[k]}": float(np.max(v)) for k, v in cols.items() if k != "t"})
+        entry["max_abs_bending_stress_Pa"] = {b: float(np.nanmax(np.abs(extra[f"stress_sigma_{b}"])))
+                                              for b in r.system.beam_names}
         per[str(label) if label != "" else name] = entry
         if figures:
             series = {k: v for k, v in cols.items() if k != "t"}

@@ -28,6 +28,20 @@ from .points import BeamNode
 from .system import System
 
 
+#: units of the arrays every :meth:`Results.save_npz` file holds (its ``units`` entry)
+NPZ_UNITS = {
+    "t": "s",
+    "q": "per coordinate_labels (m, rad, - for slopes)",
+    "v": "per coordinate_labels, per s (m/s, rad/s, 1/s)",
+    "acc": "per coordinate_labels, per s^2 (m/s^2, rad/s^2, 1/s^2)",
+    "lam": "per constraint_labels: N for a position equation, N*m for a slope or angle equation",
+    "work": "J",
+    "iterations": "-",
+    "coordinate_labels": "-", "work_labels": "-", "constraint_labels": "-", "body_names": "-",
+    "beam_names": "-", "sliding_names": "-",
+}
+
+
 @eqx.filter_jit
 def _energies(system: System, q, v, t):
     def one(qq, vv, tt):
@@ -445,10 +459,13 @@ class Results:
         return viol[:, 0], viol[:, 1]
 
     def summary(self) -> dict[str, Any]:
-        """Diagnostics of the run as a JSON-ready dict."""
+        """Diagnostics of the run as a JSON-ready dict; keys of dimensional scalars carry
+        their unit (``dt_s``, ``t_end_s``, ``failure_time_s``, ``wall_time_s``);
+        ``max_constraint_violation`` is in the units of the constraint equations (m for
+        positions, - for slopes), ``energy_balance_error`` relative."""
         pos, vel = self.constraint_violation()
-        return dict(solver=self.solver, dt=self.dt, t_end=float(self.t[-1]), outputs=len(self.t),
-                    status=self.status, failure_time=self.failure_time,
+        return dict(solver=self.solver, dt_s=self.dt, t_end_s=float(self.t[-1]), outputs=len(self.t),
+                    status=self.status, failure_time_s=self.failure_time,
                     wall_time_s=self.wall_time_s, compile_time_s=self.compile_time_s,
                     newton_iterations=int(self.iterations.sum()),
                     max_constraint_violation=float(pos.max()),
@@ -456,21 +473,33 @@ class Results:
                     energy_balance_error=self.energy_balance_error(), **self.info)
 
     # ------------------------------------------------------------------ files
-    def save_npz(self, path: str | Path, **extra) -> None:
+    def save_npz(self, path: str | Path, *, units: dict | None = None, **extra) -> None:
         """Full state histories (and any extra arrays) to a NumPy .npz file: ``t`` [s],
         ``q``, ``v``, ``acc`` with one column per :meth:`~ancf_jax.system.System.coordinate_labels`
         entry (units per s, per s² for v, acc), ``lam`` per ``constraint_labels``,
         ``work`` per ``work_labels``; and ``checkpoint_*`` (the run's
-        :attr:`checkpoint`, read back by :func:`ancf_jax.simulation.load_checkpoint`)."""
-        np.savez_compressed(path, t=self.t, q=self.q, v=self.v, acc=self.acc, lam=self.lam,
-                            work=self.work, iterations=self.iterations,
-                            coordinate_labels=np.array(self.system.coordinate_labels()),
-                            work_labels=np.array(["dissipated [J]", "external [J]", "constraint [J]"]),
-                            constraint_labels=np.array(self.system.constraint_labels()),
-                            body_names=np.array(self.system.body_names),
-                            beam_names=np.array(self.system.beam_names),
-                            sliding_names=np.array(self.system.sliding_names), **self._checkpoint_arrays(),
-                            **extra)
+        :attr:`checkpoint`, read back by :func:`ancf_jax.simulation.load_checkpoint`).
+
+        ``units`` maps each extra array's name to its SI unit (``"Pa"``, ``"m"``; ``"-"``:
+        none; an extra without one is stored as ``"unspecified"``). The file's ``units``
+        entry is the JSON text of {array name: unit} for every array in it:
+        ``json.loads(str(np.load(path)["units"]))``; a unit that varies by column says
+        where it is (``"per coordinate_labels"``)."""
+        arrays = dict(t=self.t, q=self.q, v=self.v, acc=self.acc, lam=self.lam, work=self.work,
+                      iterations=self.iterations,
+                      coordinate_labels=np.array(self.system.coordinate_labels()),
+                      work_labels=np.array(["dissipated [J]", "external [J]", "constraint [J]"]),
+                      constraint_labels=np.array(self.system.constraint_labels()),
+                      body_names=np.array(self.system.body_names),
+                      beam_names=np.array(self.system.beam_names),
+                      sliding_names=np.array(self.system.sliding_names), **self._checkpoint_arrays())
+        if set(extra) & set(arrays):
+            raise ModelError(f"save_npz: extra arrays may not be called {sorted(set(extra) & set(arrays))}")
+        unit_map = dict(NPZ_UNITS)
+        unit_map.update({k: "checkpoint: per coordinate_labels (q, v, acc), s (t)" for k in arrays
+                         if k.startswith("checkpoint_")})
+        unit_map.update({k: (units or {}).get(k, "unspecified") for k in extra})
+        np.savez_compressed(path, **arrays, **extra, units=np.array(json.dumps(unit_map)))
 
     def _checkpoint_arrays(self) -> dict:
         if self.checkpoint is None:

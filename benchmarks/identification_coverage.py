@@ -88,7 +88,7 @@ def main():
     res["discretization"]["notes"] = checked.discretization["notes"]
     ways = {"coarse": coarse}
     dz = checked.discretization
-    final = coarse.refined(step=int(round(coarse.dt / dz["final_dt"])),
+    final = coarse.refined(step=int(round(coarse.dt / dz["final_dt_s"])),
                            mesh=(dz["final_elements"] // args.elements) if dz["final_elements"] else 1)
     ways["default"] = final
     for name, pr in ways.items():

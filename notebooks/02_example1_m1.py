@@ -77,8 +77,8 @@ for n, r in runs.items():
 # %%
 out_dir = tempfile.mkdtemp(prefix="ancf_m1_")
 summary = report_m1(r6, out_dir, figures=False)
-for key in ("tip_y_min", "tip_y_min_time", "tip_y_final", "max_abs_sigma_e1_mid",
-            "max_abs_sigma_e1_mid_small_strain", "max_abs_stress_along_beam"):
+for key in ("tip_y_min_m", "tip_y_min_time_s", "tip_y_final_m", "max_abs_sigma_e1_mid_Pa",
+            "max_abs_sigma_e1_mid_small_strain_Pa", "max_abs_stress_along_beam_Pa"):
     print(f"{key:36s} {summary[key]: .6g}")
 
 # %% [markdown]

@@ -7,6 +7,9 @@ import numpy as np
 import pytest
 
 from ancf_jax.cli import main
+from ancf_jax.outputs import unit_suffix
+
+from .json_units import assert_unit_keys
 
 
 @pytest.mark.parametrize("argv,option", [
@@ -38,9 +41,10 @@ def test_bad_options_exit_nonzero_with_one_line(argv, option, capsys):
 
 def test_static_m1_json(capsys):
     assert main(["static", "m1", "--json"]) == 0
-    data = json.loads(capsys.readouterr().out)
-    assert set(data) == {"tip_x", "tip_y", "tip_rotation", "sigma_e1_mid"}
-    assert data["tip_y"] < -0.2 and data["sigma_e1_mid"] > 0  # upper fibre in tension
+    data = assert_unit_keys(json.loads(capsys.readouterr().out))
+    assert set(data) == {"tip_x_m", "tip_y_m", "tip_rotation_rad", "sigma_e1_mid_Pa", "units"}
+    assert data["units"] == {"tip_x_m": "m", "tip_y_m": "m", "tip_rotation_rad": "rad", "sigma_e1_mid_Pa": "Pa"}
+    assert data["tip_y_m"] < -0.2 and data["sigma_e1_mid_Pa"] > 0  # upper fibre in tension
 
 
 def test_modal_m1_json(capsys):
@@ -58,11 +62,12 @@ def test_run_m1_writes_every_file(tmp_path, capsys):
         rows = list(csv.reader(f))
     assert rows[0] == ["t", "tip_x", "tip_y", "sigma_e1_mid"]
     assert len(rows) == 1 + 51 and float(rows[-1][0]) == pytest.approx(0.05)
-    summary = json.loads((out / "summary.json").read_text())
-    for key in ("elements", "solver", "dt", "t_end", "wall_time_s", "compile_time_s", "tip_y_min",
-                "max_abs_sigma_e1_mid", "max_constraint_violation", "energy_balance_error"):
+    summary = assert_unit_keys(out / "summary.json")  # keys of dimensional numbers end in their unit
+    for key in ("elements", "solver", "dt_s", "t_end_s", "wall_time_s", "compile_time_s", "tip_y_min_m",
+                "tip_y_min_time_s", "tip_y_final_m", "max_abs_sigma_e1_mid_Pa", "max_abs_sigma_e1_mid_small_strain_Pa",
+                "max_abs_stress_along_beam_Pa", "max_constraint_violation", "energy_balance_error"):
         assert key in summary
-    assert summary["elements"] == 6 and summary["t_end"] == pytest.approx(0.05)
+    assert summary["elements"] == 6 and summary["t_end_s"] == pytest.approx(0.05)
     assert summary["units"] == {"t": "s", "tip_x": "m", "tip_y": "m", "sigma_e1_mid": "Pa"}
     npz = np.load(out / "m1_n6.npz")
     labels = list(npz["coordinate_labels"])  # one per column of q, v, acc, with units
@@ -70,6 +75,12 @@ def test_run_m1_writes_every_file(tmp_path, capsys):
     assert labels[:3] == ["body:tip.x [m]", "body:tip.y [m]", "body:tip.theta [rad]"]
     assert labels[3] == "beam:beam.node[0].x [m]" and labels[-1] == "beam:beam.node[6].slope_y [-]"
     assert list(npz["work_labels"]) == ["dissipated [J]", "external [J]", "constraint [J]"]
+    units = json.loads(str(npz["units"]))  # a unit for every array of the file
+    assert set(units) == set(npz.files) - {"units"}
+    assert "unspecified" not in units.values()
+    assert units["t"] == "s" and units["work"] == "J" and "coordinate_labels" in units["q"]
+    assert "per s" in units["v"] and "constraint_labels" in units["lam"]
+    assert units["stress_sigma"] == units["sigma_e1_mid"] == "Pa" and units["stress_s"] == units["tip"] == "m"
     for name in ("m1_n6.npz", "fig5_shapes.png", "fig6_tip_displacement.png",
                  "fig7_stress_e1_mid.png", "fig8_stress_map.png"):
         assert (out / name).stat().st_size > 0
@@ -102,10 +113,10 @@ def test_check_summarizes_without_running(capsys):
 
 def test_static_m2_json_keys(capsys):
     assert main(["static", "m2", "--elements", "12", "--json"]) == 0
-    data = json.loads(capsys.readouterr().out)
-    assert set(data) == {"point1_x", "point1_y", "rb2_x", "rb2_y", "horizontal_tension"}
-    assert data["rb2_y"] == pytest.approx(data["point1_y"] - 0.5)  # cabin hangs below
-    assert data["horizontal_tension"] > 0
+    data = assert_unit_keys(json.loads(capsys.readouterr().out))
+    assert set(data) == {"point1_x_m", "point1_y_m", "rb2_x_m", "rb2_y_m", "horizontal_tension_N", "units"}
+    assert data["rb2_y_m"] == pytest.approx(data["point1_y_m"] - 0.5)  # cabin hangs below
+    assert data["horizontal_tension_N"] > 0 and data["units"]["horizontal_tension_N"] == "N"
 
 
 def test_run_any_scenario_file_with_overrides(tmp_path, capsys):
@@ -113,8 +124,13 @@ def test_run_any_scenario_file_with_overrides(tmp_path, capsys):
     argv = ["run", "flexible_pendulum", "--set", "beams.pendulum.elements=4", "--t-end", "0.01",
             "--out", str(out), "--no-progress"]
     assert main(argv) == 0
-    summary = json.loads((out / "summary.json").read_text())
+    summary = assert_unit_keys(out / "summary.json")
     assert summary["model"] == "flexible_pendulum"
+    run = summary["runs"]["flexible_pendulum"]
+    assert run["t_end_s"] == pytest.approx(0.01) and "dt_s" in run and "failure_time_s" in run
+    for name, unit in summary["units"].items():  # each column's extremes carry its unit
+        if name != "t":
+            assert f"{name}_min{unit_suffix(unit)}" in run and f"{name}_max{unit_suffix(unit)}" in run
     csvs = sorted(p.name for p in out.glob("*.csv"))
     assert csvs == ["flexible_pendulum.csv"]
     with open(out / csvs[0]) as f:

@@ -12,6 +12,7 @@ import os
 import tomllib
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from ancf_jax import simulation
@@ -19,6 +20,8 @@ from ancf_jax.cli import main
 from ancf_jax.errors import ModelError, SimulationInterrupted
 from ancf_jax.failures import Failure
 from ancf_jax.simulation import MAX_STEPS, check_run_size
+
+from .json_units import assert_unit_keys
 
 M1 = Path(__file__).resolve().parents[1] / "ancf_jax" / "models" / "m1.toml"
 
@@ -68,6 +71,21 @@ def test_out_under_a_file_is_refused(tmp_path, capsys):
     afile.write_text("x")
     for argv in out_commands(afile / "sub"):
         usage_error(argv, capsys, "argument --out", "which is not a directory")
+
+
+def test_sweep_out_and_netcdf_locations_are_checked_before_running(tmp_path, capsys):
+    """sweep checks its store (--out) and --netcdf file before importing zarr or
+    compiling: a bad location used to be found after every member had run."""
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    sweep = ["sweep", "m1", "--param", "beams.beam.section.E=[1e11, 2e11]", "--design", "grid"]
+    usage_error([*sweep, "--out", str(afile)], capsys, "argument --out", "not a directory")
+    usage_error([*sweep, "--out", str(afile / "store.zarr")], capsys, "argument --out", "which is not a directory")
+    usage_error([*sweep, "--out", str(tmp_path / "store.zarr"), "--netcdf", str(afile / "x.nc")], capsys,
+                "argument --netcdf", "which is not a directory")
+    usage_error([*sweep, "--out", str(tmp_path / "store.zarr"), "--netcdf", str(tmp_path)], capsys,
+                "argument --netcdf", "is a directory")
+    assert not (tmp_path / "store.zarr").exists()
 
 
 def test_out_in_a_read_only_directory_is_refused(tmp_path, capsys):
@@ -134,8 +152,9 @@ def test_run_interrupted_writes_results_and_exits_130(interrupting, tmp_path, ca
                             "--no-figures"], capsys)
     assert code == 130
     assert len(err) == 1 and "interrupted" in err[0]
-    summary = json.loads((out / "summary.json").read_text())
+    summary = assert_unit_keys(out / "summary.json")
     assert summary["runs"]["flexible_pendulum"]["status"] == "interrupted"
+    assert summary["runs"]["flexible_pendulum"]["failure_time_s"] > 0
     with open(out / "flexible_pendulum.csv") as f:
         rows = list(csv.reader(f))
     assert 1 < len(rows) - 1 < 21
@@ -146,10 +165,28 @@ def test_run_interrupted_writes_results_and_exits_130(interrupting, tmp_path, ca
     (["run", "m1", "--dt", "1e-12"], "--dt = 1e-12 s"),
     (["run", "m1", "--t-end", "1e9"], "--t-end = 1e+09 s"),
     (["fatigue", "m1", "--dt", "1e-12"], "--dt = 1e-12 s"),
+    (["synth", "m1", "--noise", "0", "--dt", "1e-12", "--out", "x.csv"], "--dt = 1e-12 s"),
+    (["fit", "m1", "--data", "data.csv", "--dt", "1e-12"], "--dt = 1e-12 s"),
+    (["fit", "m1", "--data", "data.csv", "--t-end", "1e9"], "--t-end = 1e+09 s"),
+    (["check", "m1", "--set", "solver.dt=1e-12"], "solver.dt = 1e-12 s"),
 ])
-def test_runaway_runs_are_refused_with_the_estimate(argv, fragment, capsys):
+def test_runaway_runs_are_refused_with_the_estimate(argv, fragment, capsys, tmp_path, monkeypatch):
+    """run, fatigue, synth, fit and check refuse a run of more than MAX_STEPS steps
+    before compiling, with the estimate and the option that allows it."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "data.csv").write_text("t,y\n" + "".join(f"{k / 100},0.0\n" for k in range(20)))
     line = usage_error(argv, capsys, fragment, "time steps", "--max-steps")
     assert "2e+12" in line or "1e+12" in line
+
+
+def test_check_and_synth_take_max_steps(capsys, tmp_path):
+    """--max-steps lifts the limit in check (which then validates) as in run."""
+    code, out, err = run_cli(["check", "m1", "--set", "solver.t_end=200", "--max-steps", "300000"], capsys)
+    assert code == 0 and "valid scenario 'm1'" in out, err
+    usage_error(["check", "m1", "--set", "solver.t_end=200", "--max-steps", "1000"], capsys,
+                "solver.t_end = 200 s", "2e+05 time steps", "--max-steps = 1e+03")
+    usage_error(["synth", "m1", "--noise", "0", "--max-steps", "10", "--out", str(tmp_path / "y.csv")],
+                capsys, "time steps", "--max-steps = 10")
 
 
 def test_max_steps_is_checked_and_lifts_the_limit():
@@ -177,6 +214,14 @@ def test_time_functions_not_finite_on_the_grid_are_refused(expr, value, capsys):
                     "not finite at t = 0 s", f"value {value}")
 
 
+def test_time_functions_are_checked_at_the_steps_between_outputs(capsys):
+    """1/(t - 0.005) is finite at every output time (0, 0.01, ...) but infinite at the
+    fifth step of 0.001 s, where the solver evaluates it."""
+    load = 'loads.spin={type="torque", body="tip", torque=1.0, time_function="1/(t-0.005)"}'
+    usage_error(["check", "m1", "--set", load, "--set", "outputs.dt=0.01", "--set", "solver.dt=0.001"], capsys,
+                "loads.spin.time_function", "not finite at t = 0.005 s", "every time step")
+
+
 def test_prescribed_motion_not_finite_later_names_the_joint(tmp_path, capsys):
     data = tomllib.loads(M1.read_text())
     data["joints"]["drive"] = {"type": "prescribed_body", "body": "tip", "coordinate": "theta",
@@ -201,6 +246,52 @@ def test_zero_length_ramp_is_refused(capsys):
                 "zero-length")
 
 
+def test_body_far_from_its_fixed_joint_needs_local(capsys):
+    """A tip body 5 m from the node it is fixed to was welded on through an invisible
+    rigid arm: without local it is refused naming the joint; with local (an intended
+    arm) it is accepted."""
+    far = "bodies.tip.position=[5.0, 0.0]"
+    usage_error(["check", "m1", "--set", far], capsys, "joints.tip_joint.local", "4.598 m", "rigid arm",
+                "accepted: local = [x, y]")
+    code, out, err = run_cli(["check", "m1", "--set", far, "--set", "joints.tip_joint.local=[-4.598, 0.0]"],
+                             capsys)
+    assert code == 0 and "valid scenario 'm1'" in out, err
+
+
+def test_model_refuses_a_hidden_rigid_arm():
+    from ancf_jax import mesh
+    from ancf_jax.model import Model, node
+    from ancf_jax.section import Section
+
+    def model(position, local=None):
+        m = Model(gravity=(0.0, 0.0))
+        m.add_beam("arm", mesh.straight((0, 0), (1, 0), 1.0, 2), Section(1e6, 1e-4, 1e-10, 0.1))
+        m.add_body("tip", mass=0.1, inertia=1e-4, position=position)
+        m.clamp("root", "arm", node=0)
+        m.fixed("weld", node("arm", -1), body="tip", local=local)
+        return m
+
+    with pytest.raises(ModelError, match=r"fixed joint 'weld': body 'tip' starts 5 m from node -1 of beam 'arm'"
+                                         r".*rigid arm.*give local"):
+        model((1.0, 5.0)).build()
+    model((1.0, 5.0), local=(0.0, -5.0)).build()  # an intended arm
+    model((1.0 + 1e-13, 0.0)).build()  # round-off is not an arm
+
+
+def test_zero_length_spring_is_refused(capsys):
+    """A spring-damper whose ends coincide at the start failed one step in as 'state
+    became NaN' (its direction is undefined at zero length): refused naming the load,
+    by the scenario check where the file fixes both points, else by the build."""
+    spring = 'loads.s={{type="spring_damper", a={a}, b={{body="tip"}}, stiffness=100.0}}'
+    usage_error(["check", "m1", "--set", spring.format(a="{ground=[0.402, 0.0]}")], capsys,
+                "loads.s", "coincide at the initial state", "accepted: two points that start apart")
+    usage_error(["check", "m1", "--set", spring.format(a='{beam="beam", s=0.402}')], capsys,
+                "spring-damper 's'", "coincide at the initial state", "s = 0.402 m on beam 'beam' and body 'tip'")
+    from ancf_jax.model import Model, body_point
+    with pytest.raises(ModelError, match="spring-damper 'k': both ends are body 'b'"):
+        Model().spring_damper("k", body_point("b"), body_point("b"), stiffness=1.0)
+
+
 def test_empty_element_count_is_refused(capsys):
     usage_error(["run", "m2", "--elements", "6,,"], capsys, "argument --elements", "'6,,'")
 
@@ -208,6 +299,21 @@ def test_empty_element_count_is_refused(capsys):
 def test_output_interval_longer_than_the_run_is_refused(capsys):
     usage_error(["run", "m1", "--t-end", "0.5", "--output-dt", "1"], capsys, "outputs.dt",
                 "longer than the run", "0.001 .. 0.5")
+
+
+@pytest.mark.parametrize("command", ["run", "fatigue"])
+def test_dt_longer_than_the_output_step_raises_the_output_step(command, capsys, tmp_path):
+    """--dt 0.05 on M1 (outputs every 1 ms) used to fail naming outputs.dt, which the
+    user never gave: the output step is raised to --dt with a one-line note (here the
+    run is then refused by --max-steps 1, before compiling, on the raised grid)."""
+    code, _, err = run_cli([command, "m1", "--dt", "0.05", "--max-steps", "1", "--out", str(tmp_path / "o")],
+                           capsys)
+    assert code == 2 and len(err) == 2, err
+    assert "note" in err[0] and "outputs.dt = 0.001 s" in err[0] and "outputs every 0.05 s" in err[0]
+    assert "--dt = 0.05 s needs about 40 time steps" in err[1]
+    # an output step asked for explicitly is not changed: the two options are named
+    usage_error(["run", "m1", "--dt", "0.05", "--output-dt", "0.01"], capsys, "argument --output-dt",
+                "shorter than --dt = 0.05 s", "accepted: a number >= 0.05")
 
 
 def test_more_modes_than_degrees_of_freedom_names_the_maximum(capsys):
@@ -239,9 +345,16 @@ def test_check_finds_redundant_joints(capsys):
     usage_error(["check", "m1", "--set", pin], capsys, "redundant", "clamp", "pin")
 
 
-def test_run_refuses_conflicting_joints_with_one_line(capsys, tmp_path):
+@pytest.mark.parametrize("command", [
+    ["run"], ["static"], ["modal"], ["fatigue", "--study", "alpha=0.1,0.2"],
+    ["run", "--continue-from", "earlier.npz"],
+], ids=["run", "static", "modal", "fatigue-study", "continue-from"])
+def test_run_refuses_conflicting_joints_with_one_line(command, capsys, tmp_path):
+    """Every command that builds the model refuses conflicting joints with one line
+    and exit 2 (static, modal, fatigue --study and --continue-from gave a traceback)."""
     pin = 'joints.pin={type="pin", point={beam="beam", node=0}, location=[0.1, 0.0]}'
-    usage_error(["run", "m1", "--set", pin, "--out", str(tmp_path / "o")], capsys, "conflicting")
+    out = ["--out", str(tmp_path / "o")] if command[0] in ("run", "fatigue") else []
+    usage_error([command[0], "m1", "--set", pin, *command[1:], *out], capsys, "conflicting", "m1.toml")
     assert not (tmp_path / "o").exists()
 
 
@@ -260,6 +373,29 @@ def test_modal_honours_the_modal_table(capsys):
     code, out, _ = run_cli(["modal", "m1", "--set", "modal.modes=3", "--json"], capsys)
     assert code == 0 and len(json.loads(out)["frequencies_hz"]) == 3
     usage_error(["modal", "m1", "--set", "modal.modes=500"], capsys, "modal.modes", "1 .. 24")
+
+
+def test_negative_frequencies_are_explained(capsys, monkeypatch):
+    """omega^2 < 0 (a slack cable about its reference shape) printed negative
+    frequencies without a word: a note says what they mean and what to try, in the
+    table and as the JSON key note (modal_analysis is replaced: nothing is compiled)."""
+    from ancf_jax import modal
+    from ancf_jax.cli import _negative_frequency_note
+
+    assert _negative_frequency_note([1.0, 2.0], "initial") is None
+    assert "--about equilibrium" in _negative_frequency_note([-0.5, 2.0], "initial")
+    assert "not a stable one" in _negative_frequency_note([-0.5, -0.1], "equilibrium")
+    fake = modal.ModalResult(np.array([-0.7, 3.0]), np.array([-4.4, 18.8]), np.zeros((2, 31)))
+    monkeypatch.setattr(modal, "modal_analysis", lambda *a, **k: fake)
+    code, out, _ = run_cli(["modal", "m1", "--about", "initial", "--modes", "2", "--json"], capsys)
+    data = json.loads(out)
+    assert code == 0 and data["frequencies_hz"] == [-0.7, 3.0]
+    assert "1 negative frequency" in data["note"] and "unstable" in data["note"]
+    assert "--about equilibrium" in data["note"]
+    code, out, _ = run_cli(["modal", "m1", "--about", "initial", "--modes", "2"], capsys)
+    assert code == 0 and out.splitlines()[-1].startswith("note: 1 negative frequency")
+    code, out, _ = run_cli(["modal", "--help"], capsys)
+    assert "negative frequency" in " ".join(out.split())
 
 
 def test_check_help_says_what_set_does(capsys):

@@ -22,6 +22,8 @@ from ancf_jax.cli import main
 from ancf_jax.element.stress import bending_stress
 from ancf_jax.element.strain_energy import axial_strain
 
+from .json_units import assert_unit_keys
+
 MPA = 1e6
 
 
@@ -288,18 +290,18 @@ def test_cli_fatigue_end_to_end(tmp_path, capsys):
     assert len(data) == 4 and {r[0] for r in rows[1:]} == {"beam"}        # 2 Barlow points x 2 elements
     assert (data[:, 1] > 0).all()
     np.testing.assert_allclose(data[:, 2], 1 / data[:, 1], rtol=1e-9)
-    info = json.loads((out / "fatigue.json").read_text())
+    info = assert_unit_keys(out / "fatigue.json")
     assert {"max_damage", "hot_spot", "sn_curve", "method", "units"} <= set(info)
     assert info["method"] == "rainflow"
     i = int(np.argmax(data[:, 1]))
     assert info["max_damage"] == pytest.approx(data[i, 1], rel=1e-9)
-    assert info["hot_spot"]["beam"] == "beam" and info["hot_spot"]["s"] == pytest.approx(data[i, 0])
+    assert info["hot_spot"]["beam"] == "beam" and info["hot_spot"]["s_m"] == pytest.approx(data[i, 0])
     # named after the nearest joint holding the beam (clamp at s = 0, tip joint at the end)
     hs = info["hot_spot"]
-    joint, at = min((("clamp", 0.0), ("tip_joint", 0.402)), key=lambda j: abs(j[1] - hs["s"]))
-    assert hs["near"] == dict(joint=joint, distance_m=pytest.approx(abs(at - hs["s"])))
+    joint, at = min((("clamp", 0.0), ("tip_joint", 0.402)), key=lambda j: abs(j[1] - hs["s_m"]))
+    assert hs["near"] == dict(joint=joint, distance_m=pytest.approx(abs(at - hs["s_m"])))
     assert info["life_hours"] == pytest.approx(0.001 / info["max_damage"], rel=1e-9)
-    assert info["sn_curve"]["reference_range_pa"] == 160e6
+    assert info["sn_curve"]["reference_range_Pa"] == 160e6 and info["units"]["s_m"] == "m"
     for name in ("cycles_hot_spot.png", "damage_along.png"):
         assert (out / name).stat().st_size > 1000
 
@@ -331,7 +333,7 @@ def test_study_of_damage_against_damping_with_its_derivative_through_the_run():
     res = F.study(system, state, "alpha", [a0 - da, a0, a0 + da], st, **run)
     assert res.names == ("alpha",) and res.damage.shape == (3, 2) and res.jacobian.shape == (3, 2, 1)
     assert (res.status == 0).all() and (res.damage > 0).all()
-    assert res.hot_spot[1] == dict(beam="beam", s=0.0)          # the clamp
+    assert res.hot_spot[1] == dict(beam="beam", s_m=0.0)        # the clamp
     fd = (res.damage[2] - res.damage[0]) / (2 * da)
     assert np.all(np.abs(fd) > 1e-3 * res.damage[1])            # alpha matters
     np.testing.assert_allclose(res.jacobian[1, :, 0], fd, rtol=1e-5)
@@ -376,6 +378,7 @@ def test_cli_fatigue_study_writes_one_row_per_value(tmp_path, capsys):
     d = np.array([float(r["max_damage"]) for r in rows])
     g = np.array([float(r["d_max_damage_d_alpha"]) for r in rows])
     assert d[2] < d[0] and (g < 0).all()                    # more damping, less damage
-    info = json.loads((out / "study.json").read_text())
+    info = assert_unit_keys(out / "study.json")
     assert info["parameters"] == ["alpha"] and info["method"] == "dirlik"
+    assert info["hot_spot"][1] == dict(beam="beam", s_m=0.0) and info["points"]["s_m"] == [0.0, 0.2]
     np.testing.assert_allclose(info["max_damage"], d, rtol=1e-15)

@@ -23,6 +23,8 @@ from ancf_jax.errors import ModelError
 from ancf_jax.identification import DataError, Measurements, Problem, fit, fit_batch, read_csv, synthesize
 from ancf_jax.identification.report import DETERMINED, FIXED, ZERO
 
+from .json_units import assert_unit_keys
+
 TRUTH = {"alpha": 0.02, "beta": 0.0}
 ELEMENTS, T_END, DT, RATE, SIGMA = 3, 1.0, 2e-3, 500.0, 1e-3
 SEEDS = (0, 1, 2, 3)
@@ -299,9 +301,11 @@ def test_cli_synth_then_fit(tmp_path, capsys, problem, clean):
     # discretization check (on by default, tests/test_identification_real.py) does not apply
     assert main(["fit", "m1", *CLI_PROBLEM, "--data", str(data), "--params", "alpha",
                  "--init", "alpha=0.01", "--out", str(out), "--no-progress", "--no-refine"]) == 0
-    report = json.loads((out / "fit.json").read_text())
-    for key in ("alpha", "beta", "alpha_stderr", "beta_stderr", "loss_history", "iterations", "wall_time_s"):
+    report = assert_unit_keys(out / "fit.json")  # numbers with their unit: in the key or the units map
+    for key in ("alpha", "beta", "alpha_stderr", "beta_stderr", "loss_history", "iterations", "wall_time_s",
+                "dt_s", "residual_rms"):
         assert key in report
+    assert report["units"]["alpha"] == "1/s" and report["units"]["residual_rms"] == "m"
     assert report["beta"] == 0.0 and report["beta_stderr"] is None and report["beta_status"] == FIXED
     assert report["alpha_stderr"] > 0 and report["iterations"] >= 1 and report["converged"]
     # 0.2 mm of noise: alpha is determined (standard error about 0.005 1/s)

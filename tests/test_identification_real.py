@@ -23,6 +23,8 @@ from ancf_jax.identification import (Measurements, Problem, fit, fit_joint, ljun
 from ancf_jax.identification.report import gauss_newton_statistics
 from ancf_jax.identification.report import DETERMINED, FIXED
 
+from .json_units import assert_unit_keys
+
 ELEMENTS, T_END, DT, RATE = 3, 1.0, 2e-3, 500.0
 NUISANCE = ("time_offset", "offset", "gain")
 #: the record: model time = record time + TAU; sensor reads GAIN * y + OFFSET
@@ -199,14 +201,14 @@ def test_discretization_check_catches_step_bias(plain):
     dz = res.discretization
     first = dz["rounds"][0]["checks"]["step"]
     assert first["max_shift_se"] > 0.3, first
-    assert dz["refined"] == [] and not dz["within_limit"] and dz["final_dt"] == 2e-3
+    assert dz["refined"] == [] and not dz["within_limit"] and dz["final_dt_s"] == 2e-3
     assert any("refinement budget (0) is spent" in n for n in dz["notes"])
     bias = res.estimates[0] - 0.02
     predicted = first["shift"]["alpha"]
     assert abs(predicted + 0.8 * bias) < 0.25 * abs(predicted) + 2 * res.stderr[0], (predicted, bias, res.stderr)
     assert "ABOVE the limit" in res.summary() or "does not explain" in res.summary()
     d = res.to_dict()
-    assert d["discretization"]["final_dt"] == 2e-3
+    assert d["discretization"]["final_dt_s"] == 2e-3
     json.dumps(d)
 
 
@@ -247,8 +249,9 @@ def test_cli_fit_with_nuisance_and_noise(problem, record, tmp_path, capsys):
                  "--data", str(path), "--params", "alpha", "--init", "alpha=0.01,beta=0",
                  "--nuisance", "time_offset,offset,gain", "--noise", str(SIGMA), "--no-refine",
                  "--no-figures", "--no-progress", "--out", str(out)]) == 0
-    report = json.loads((out / "fit.json").read_text())
+    report = assert_unit_keys(out / "fit.json")
     assert report["nuisance"] == list(NUISANCE) and report["discretization"] is None
+    assert report["units"]["time_offset"] == "s"
     assert abs(report["time_offset"] - TAU) <= 3 * report["time_offset_stderr"]
     assert report["diagnostics"]["white"]
     assert "(nuisance)" in capsys.readouterr().out

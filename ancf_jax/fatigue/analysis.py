@@ -151,9 +151,9 @@ class FatigueResult:
         for i in order:
             if len(out) == count or d[i] <= 0.0:
                 break
-            if any(o["beam"] == self.beam[i] and abs(o["s"] - self.s[i]) < 1e-12 for o in out):
+            if any(o["beam"] == self.beam[i] and abs(o["s_m"] - self.s[i]) < 1e-12 for o in out):
                 continue
-            out.append(dict(beam=str(self.beam[i]), s=float(self.s[i]), damage=float(d[i]),
+            out.append(dict(beam=str(self.beam[i]), s_m=float(self.s[i]), damage=float(d[i]),
                             life_repeats=_num(life(d[i])),
                             fibre="+c" if self.damage_fibres[i, 0] >= self.damage_fibres[i, 1] else "-c",
                             near=self.near(str(self.beam[i]), float(self.s[i]))))
@@ -164,20 +164,23 @@ class FatigueResult:
         p, f = self.hot_index
         st = self.settings
         d = float(self.damage.max()) if self.damage.size else 0.0
-        out = dict(max_damage=d, hot_spot=dict(beam=str(self.beam[p]), s=float(self.s[p]),
+        out = dict(max_damage=d, hot_spot=dict(beam=str(self.beam[p]), s_m=float(self.s[p]),
                                                fibre="+c" if f == 0 else "-c",
                                                near=self.near(str(self.beam[p]), float(self.s[p]))),
                    life_repeats=_num(life(d)), sn_curve=st.curve.to_dict(), method=st.method,
-                   mean_stress_correction=st.correction, ultimate_strength_pa=st.ultimate_strength,
+                   mean_stress_correction=st.correction, ultimate_strength_Pa=st.ultimate_strength,
                    measure=st.measure, scf=st.scf, points=len(self.s), duration_s=self.duration,
                    t_start_s=st.t_start, hot_spots=self.hot_spots())
         if st.hours_per_run is not None:
             out["life_hours"] = _num(life(d) * st.hours_per_run)
         if st.passes_per_run is not None:
             out["life_passes"] = _num(life(d) * st.passes_per_run)
-        out["units"] = dict(s="m", distance_m="m", damage="-", life_repeats="repetitions of the simulated history",
-                            life_hours="h", life_passes="passes", duration_s="s", stress="Pa",
-                            reference_range_pa="Pa", knee_range_pa="Pa", cutoff_range_pa="Pa")
+        out["units"] = dict(s_m="m", distance_m="m", damage="-", max_damage="- (per run)",
+                            life_repeats="repetitions of the simulated history", life_hours="h",
+                            life_passes="passes", duration_s="s", t_start_s="s", stress="Pa",
+                            ultimate_strength_Pa="Pa", reference_range_Pa="Pa", knee_range_Pa="Pa",
+                            cutoff_range_Pa="Pa", reference_cycles="cycles", knee_cycles="cycles",
+                            cutoff_cycles="cycles", m1="- (S-N slope)", m2="- (S-N slope)", scf="-")
         return out
 
     def hot_spot_cycles(self):
@@ -200,7 +203,7 @@ class FatigueResult:
             from .plots import cycle_histogram, damage_along
             r, _, c = self.hot_spot_cycles()
             hs = data["hot_spot"]
-            cycle_histogram(r, c, title=f"rainflow cycles at {hs['beam']} s = {hs['s']:.3f} m ({hs['fibre']})",
+            cycle_histogram(r, c, title=f"rainflow cycles at {hs['beam']} s = {hs['s_m']:.3f} m ({hs['fibre']})",
                             path=out / "cycles_hot_spot.png")
             damage_along(self.beam, self.s, self.damage_fibres, path=out / "damage_along.png",
                          hot_spots=data["hot_spots"])

@@ -38,7 +38,7 @@ def damage_along(beam, s, damage_fibres, *, path=None, hot_spots=()):
     for h in hot_spots[:3]:
         near = h.get("near")
         where = f" (at {near['joint']})" if near else ""
-        ax.annotate(f"{h['beam']} s={h['s']:.2f} m{where}", (h["s"], h["damage"]), fontsize=7,
+        ax.annotate(f"{h['beam']} s={h['s_m']:.2f} m{where}", (h["s_m"], h["damage"]), fontsize=7,
                     xytext=(4, 4), textcoords="offset points")
     ax.set_xlabel("arc length s [m]")
     ax.set_ylabel("damage per run [-]")

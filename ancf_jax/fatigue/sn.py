@@ -142,10 +142,10 @@ class SNCurve(eqx.Module):
         def f(x):
             x = float(x)
             return None if math.isinf(x) else x
-        return dict(reference_range_pa=f(self.reference_range), reference_cycles=f(self.reference_cycles),
+        return dict(reference_range_Pa=f(self.reference_range), reference_cycles=f(self.reference_cycles),
                     m1=f(self.m1), knee_cycles=f(self.knee_cycles), m2=f(self.m2),
-                    cutoff_cycles=f(self.cutoff_cycles), knee_range_pa=f(self.knee_range),
-                    cutoff_range_pa=f(self.cutoff_range))
+                    cutoff_cycles=f(self.cutoff_cycles), knee_range_Pa=f(self.knee_range),
+                    cutoff_range_Pa=f(self.cutoff_range))
 
 
 def equivalent_range(ranges, means, correction="none", ultimate_strength=None):

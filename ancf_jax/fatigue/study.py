@@ -72,9 +72,9 @@ class StudyResult:
 
     @property
     def hot_spot(self) -> list[dict]:
-        """Per member: beam and s of its most damaged point."""
+        """Per member: beam and arc length ``s_m`` [m] of its most damaged point."""
         i = np.argmax(self.damage, axis=1)
-        return [dict(beam=str(self.beam[k]), s=float(self.s[k])) for k in i]
+        return [dict(beam=str(self.beam[k]), s_m=float(self.s[k])) for k in i]
 
     def max_damage_gradient(self) -> np.ndarray:
         """∂(damage at each member's hot spot)/∂p, shape (B, k)."""
@@ -101,15 +101,17 @@ class StudyResult:
             w = csv.writer(fh)
             w.writerow(header)
             for b, (v, d, hs) in enumerate(zip(self.values, self.max_damage, self.hot_spot)):
-                row = [repr(float(x)) for x in v] + [repr(float(d)), hs["beam"], repr(hs["s"])]
+                row = [repr(float(x)) for x in v] + [repr(float(d)), hs["beam"], repr(hs["s_m"])]
                 if grad is not None:
                     row += [repr(float(g)) for g in grad[b]]
                 w.writerow(row + [statuses[b]])
         data = dict(parameters=list(self.names), values=self.values.tolist(), method="dirlik",
-                    points=dict(beam=self.beam.tolist(), s=self.s.tolist()),
+                    points=dict(beam=self.beam.tolist(), s_m=self.s.tolist()),
                     damage=self.damage.tolist(), max_damage=self.max_damage.tolist(),
                     hot_spot=self.hot_spot, status=statuses,
-                    units=dict(s="m", damage="- (per run)", values="SI (alpha 1/s, beta s, E Pa, mass kg)"))
+                    units=dict(s_m="m", damage="- (per run)", max_damage="- (per run)",
+                               values="SI (alpha 1/s, beta s, E Pa, mass kg)",
+                               d_max_damage_d_parameters="per unit of each parameter (SI)"))
         if grad is not None:
             data["d_max_damage_d_parameters"] = grad.tolist()
         (out / "study.json").write_text(json.dumps(data, indent=2))

@@ -74,7 +74,7 @@ def check(problem: Problem, result, data: Measurements, axes: Sequence[str] = AX
         z = delta / se
         free = [k for k, n in enumerate(result.names) if n in result.free and np.isfinite(z[k])]
         worst = max(free, key=lambda k: abs(z[k])) if free else None
-        out[axis] = dict(dt=fine.dt, elements=fine.elements,
+        out[axis] = dict(dt_s=fine.dt, elements=fine.elements,
                          shift={result.names[k]: float(delta[k]) for k in free},
                          shift_se={result.names[k]: float(z[k]) for k in free},
                          max_shift_se=float(abs(z[worst])) if worst is not None else 0.0,
@@ -97,14 +97,14 @@ def controlled_fit(fit_fn, problem: Problem, data: Measurements, init, *, refine
     rounds, refined = [], []
     while True:
         chk = check(problem, result, data, axes)
-        rounds.append(dict(dt=problem.dt, elements=problem.elements, checks=chk,
+        rounds.append(dict(dt_s=problem.dt, elements=problem.elements, checks=chk,
                            estimates={n: float(v) for n, v in zip(result.names, result.estimates)}))
         over = [a for a in chk if chk[a]["max_shift_se"] > limit]
         if not over or not refine or len(refined) >= budget:
             break
         step, mesh = (2 if "step" in over else 1), (2 if "mesh" in over else 1)
         problem = problem.refined(step=step, mesh=mesh)
-        refined.append(dict(step_divided_by=step, elements_multiplied_by=mesh, dt=problem.dt,
+        refined.append(dict(step_divided_by=step, elements_multiplied_by=mesh, dt_s=problem.dt,
                             elements=problem.elements))
         start = {n: float(v) for n, v in zip(result.names, result.estimates)}
         result = fit_fn(problem, data, start, **options)
@@ -126,7 +126,7 @@ def controlled_fit(fit_fn, problem: Problem, data: Measurements, init, *, refine
                      f"{worst['worst']} by {remaining:.2g} standard errors (limit {limit:g}) and {why}; the "
                      f"estimates are biased by the discretization: refine further (--dt, --elements)")
     result.discretization = dict(limit_se=limit, budget=budget, refine=refine, axes=list(chk),
-                                 refined=refined, final_dt=problem.dt, final_elements=problem.elements,
+                                 refined=refined, final_dt_s=problem.dt, final_elements=problem.elements,
                                  remaining_shift_se=remaining, within_limit=ok, rounds=rounds,
                                  summary=summary, notes=notes)
     return result, problem

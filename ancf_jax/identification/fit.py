@@ -321,6 +321,7 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
             n_samples=n_eff, wall_time_s=wall / B, compile_time_s=compile_s,
             method="optax" if optimizer is not None else method, t_grid=layout.grid, y_fit=m.y.copy(),
             y_init=y_init[b].copy(), data=data, model=problem.name, output=problem.output.name,
+            output_unit=problem.output.unit,
             nuisance=problem.nuisance, diagnostics=diag, residuals=r_data.copy(),
             jacobian=m.jac[:len(data.t)].copy(), dt=problem.dt, elements=problem.elements,
             y_measured=np.asarray(measured_host(problem, layout, m.p, data.t, m.y))))

@@ -163,6 +163,7 @@ class FitResult:
         iterations: optimiser iterations; evaluations: simulations with derivatives.
         converged, stop_reason: the stopping rule that ended the fit.
         residual_rms: sqrt(final loss) [output unit]; n_samples: samples with w > 0.
+        output_unit: the unit of the fitted output (of ``residual_rms``, ``noise``).
         wall_time_s: fit time without compilation; compile_time_s: compilation.
         t_grid, y_fit, y_init: the simulated output on the step grid at the estimate and
             at the initial guess; data: the measurements fitted.
@@ -192,6 +193,7 @@ class FitResult:
     data: object = None
     model: str = ""
     output: str = ""
+    output_unit: str = ""
     nuisance: tuple = ()
     diagnostics: Optional[dict] = None
     residuals: Optional[np.ndarray] = None
@@ -274,8 +276,22 @@ class FitResult:
         return out
 
     # ------------------------------------------------------------------ output
+    def units_map(self) -> dict:
+        """{key: unit} of the report's numbers whose key does not say its unit: each
+        parameter (also as ``NAME_stderr``, ``NAME_upper_95`` and inside ``init``,
+        ``raw_estimates``, ``bootstrap``, ``discretization``), ``residual_rms`` and the
+        noise (output unit), ``loss_history`` (output unit squared)."""
+        out_u = self.output_unit or "output unit"
+        units = {}
+        for n, u in zip(self.names, self.units):
+            units.update({n: u, f"{n}_stderr": u, f"{n}_upper_95": u})
+        units.update(residual_rms=out_u, noise=out_u, sigma=out_u, loss_history=f"({out_u})^2", loss=f"({out_u})^2")
+        return units
+
     def to_dict(self) -> dict:
-        """JSON-ready report; ``NAME`` is null unless the data determine it."""
+        """JSON-ready report; ``NAME`` is null unless the data determine it. Keys of
+        dimensional numbers end in their unit (``dt_s``, ``wall_time_s``) or are in the
+        ``units`` map (:meth:`units_map`)."""
         d = dict(model=self.model, output=self.output, method=self.method,
                  data=getattr(self.data, "source", None), params=list(self.names), free=list(self.free))
         for k, n in enumerate(self.names):
@@ -298,12 +314,13 @@ class FitResult:
         d["discretization"] = None if self.discretization is None else {
             k: v for k, v in self.discretization.items() if k != "notes"}
         d["bootstrap"] = self.bootstrap
-        d["dt"] = self.dt
+        d["dt_s"] = self.dt
         d["elements"] = self.elements
         d.update(residual_rms=self.residual_rms, n_samples=self.n_samples,
                  loss_history=[float(x) for x in self.loss_history], iterations=self.iterations,
                  evaluations=self.evaluations, converged=self.converged, stop_reason=self.stop_reason,
                  wall_time_s=self.wall_time_s, compile_time_s=self.compile_time_s)
+        d["units"] = self.units_map()
         return d
 
     def save_json(self, path) -> dict:

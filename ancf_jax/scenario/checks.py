@@ -3,8 +3,8 @@
 Run on the validated schema (:class:`~.schema.ScenarioSpec`) with host data only:
 names and their uniqueness, references to beams, bodies, joints and body points,
 node indices, arc lengths inside beams, keys that exclude or require each other, the
-output interval inside the run, and every time function finite at the run's output
-times (evaluated with NumPy: nothing is compiled).
+output interval inside the run, and every time function finite at the run's time
+steps and output times (evaluated with NumPy: nothing is compiled).
 The first problem raises :class:`~.errors.Invalid` with its key path.
 """
 
@@ -26,6 +26,8 @@ POINT_FORMS = ('{ ground = [x, y] }, { body = "name" } with optional local = [x,
                '{ beam = "name", node = i } or { beam = "name", s = arc length }')
 #: most output times at which the time functions are checked (a longer grid is sampled)
 MAX_CHECKED_TIMES = 100_001
+#: most time steps at which the time functions are checked (a longer grid is sampled)
+MAX_CHECKED_STEPS = 1_000_001
 #: constraint equations of each joint type (clamp: by mode)
 JOINT_SIZE = {"pin": 2, "revolute": 2, "fixed": 3, "sliding": 2, "prescribed_point": 2,
               "prescribed_body": 1}
@@ -156,6 +158,45 @@ class Checker:
         if name not in points:
             raise Invalid(path, f'body "{body}" has no point "{name}"',
                           f'a name in bodies.{body}.points: {_names(points)}')
+
+    def initial_position(self, ref: S.PointRef, depth: int = 0):
+        """The point's initial position [m] (host only) where the file fixes it: a ground
+        point, a body point of a body with ``position`` (or ``at`` such a point), a node
+        of a beam whose initial shape gives every node; None otherwise (the build
+        checks those)."""
+        if ref.ground is not None:
+            return np.asarray(ref.ground, float)
+        if ref.body is not None:
+            b = self.spec.bodies.get(ref.body)
+            if b is None or depth > len(self.spec.bodies):
+                return None
+            centre = (np.asarray(b.position, float) if b.position is not None else
+                      self.initial_position(b.at, depth + 1) if b.at is not None else np.zeros(2))
+            if centre is None:
+                return None
+            local = (np.asarray(b.points[ref.point], float) if ref.point is not None and ref.point in b.points
+                     else np.asarray(ref.local or (0.0, 0.0), float))
+            c, sn = np.cos(b.angle), np.sin(b.angle)
+            return centre + np.array([[c, -sn], [sn, c]]) @ local
+        if ref.beam is not None and ref.node is not None and ref.beam in self.spec.beams:
+            n = self.elements[ref.beam]
+            nodes = initial_node_positions(self.spec.beams[ref.beam], n, self.lengths[ref.beam])
+            if len(nodes) != n + 1:
+                return None
+            return nodes[ref.node]
+        return None
+
+    def apart(self, path, a: S.PointRef, b: S.PointRef):
+        """A spring-damper's ends must start apart (at zero length its direction, the
+        gradient of its length, is undefined: the run would fail as 'state became NaN')."""
+        pa, pb = self.initial_position(a), self.initial_position(b)
+        if pa is None or pb is None:
+            return
+        d = float(np.linalg.norm(pa - pb))
+        if d <= 1e-9 * max(float(np.max(np.abs(pa))), float(np.max(np.abs(pb)))) + 1e-12:
+            raise Invalid(path, f"its ends a and b coincide at the initial state ({pa[0]:g}, {pa[1]:g}) m: at zero "
+                          "length the spring's direction (the gradient of its length) is undefined",
+                          "two points that start apart")
 
     @staticmethod
     def exclusive(path, obj, keys, *, required=False):
@@ -337,6 +378,7 @@ class Checker:
                 self.body(path + ("body",), j.body)
             if j.type == "fixed":
                 self.rotating(path + ("body",), j.body, "a fixed joint")
+                self.no_hidden_arm(path, name, j)
             if j.type == "prescribed_body" and j.coordinate == "theta":
                 self.rotating(path + ("body",), j.body, "a prescribed theta")
             if j.type == "sliding" and any(j.local):
@@ -360,6 +402,22 @@ class Checker:
                         raise Invalid(path + ("drive", "time_function"),
                                       f"only a force drive takes it (this drive gives {given[0]})",
                                       "no key, or force = F")
+
+    def no_hidden_arm(self, path, name, j: S.FixedSpec):
+        """Without ``local``, a fixed joint's body must start at the joint's point: a body
+        placed elsewhere would be welded on through an invisible rigid arm."""
+        if j.local is not None:
+            return
+        at = self.initial_position(j.point)
+        centre = self.initial_position(S.PointRef(body=j.body))
+        if at is None or centre is None:
+            return  # the build checks it
+        d = float(np.linalg.norm(at - centre))
+        if d > 1e-9 * max(float(np.max(np.abs(at))), float(np.max(np.abs(centre)))) + 1e-12:
+            raise Invalid(path + ("local",), f'missing: body "{j.body}" starts {d:.4g} m from the point the joint '
+                          f"holds ({at[0]:g}, {at[1]:g}) m, and without local it would be welded on through an "
+                          "invisible rigid arm", "local = [x, y], the body point at the joint in the body frame, "
+                          "for an intended arm; or the body placed at the point")
 
     def rotating(self, path, body, what):
         if body in self.made_bodies:
@@ -411,6 +469,8 @@ class Checker:
             else:
                 self.point(path + ("a",), f.a)
                 self.point(path + ("b",), f.b)
+                if f.type == "spring_damper":
+                    self.apart(path, f.a, f.b)
 
     def monotonic(self, path, beam):
         """along = "x" needs a beam whose initial x is strictly monotonic along it."""
@@ -507,9 +567,24 @@ class Checker:
             return np.linspace(0.0, sol.t_end, MAX_CHECKED_TIMES)
         return sol.t_end / n * np.arange(n + 1)
 
+    def step_times(self) -> np.ndarray:
+        """The times [s] of the run's fixed steps (every h <= solver.dt between output
+        times), as :func:`ancf_jax.simulation.time_grid` places them; at most
+        :data:`MAX_CHECKED_STEPS` of them (evenly spread) on a longer grid."""
+        sol = self.spec.solver
+        step = self.spec.outputs.dt if self.spec.outputs.dt is not None else sol.dt
+        n = max(1, int(round(sol.t_end / step)))
+        sub = max(1, int(np.ceil(sol.t_end / n / sol.dt * (1 - 1e-9))))
+        steps = n * sub
+        if steps + 1 > MAX_CHECKED_STEPS:
+            return np.linspace(0.0, sol.t_end, MAX_CHECKED_STEPS)
+        return sol.t_end / n / sub * np.arange(steps + 1)
+
     def time_functions(self):
-        """Every expression finite at the output times and at statics.time."""
-        times = np.append(self.output_times(), self.spec.statics.time)
+        """Every expression finite at the time steps, the output times and statics.time
+        (a step between output times is where the solver evaluates it too: 1/(t − 0.005)
+        with outputs every 0.01 s and steps of 0.001 s is infinite at the fifth step)."""
+        times = np.unique(np.concatenate([self.step_times(), self.output_times(), [self.spec.statics.time]]))
         sol = self.spec.solver
         for group in ("moving_masses", "chains", "joints", "loads"):
             for name, item in getattr(self.spec, group).items():
@@ -525,8 +600,8 @@ class Checker:
                     if np.any(bad):
                         i = int(np.argmax(bad))
                         raise Invalid((group, name, key), f"{f.text!r} is not finite at t = {times[i]:g} s "
-                                      f"(value {values[i]})", "a time function finite at every output "
-                                      f"time 0 .. {sol.t_end:g} s and at statics.time [s]")
+                                      f"(value {values[i]})", "a time function finite at every time step "
+                                      f"and output time 0 .. {sol.t_end:g} s and at statics.time [s]")
 
     def outputs(self):
         for name, o in self.spec.outputs.columns.items():

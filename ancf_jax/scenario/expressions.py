@@ -18,7 +18,7 @@ Accepted:
 
 Each expression is also compiled with NumPy functions (:meth:`Expression.numpy`), so
 that a scenario's time functions are checked on the host, without JAX compiling
-anything (:mod:`~ancf_jax.scenario.checks`: finite on the run's output times).
+anything (:mod:`~ancf_jax.scenario.checks`: finite on the run's time steps and output times).
 
 Limits: at most :data:`MAX_LENGTH` characters and :data:`MAX_NODES` syntax nodes.
 """

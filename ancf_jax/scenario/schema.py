@@ -269,12 +269,16 @@ class RevoluteSpec(Table):
 
 class FixedSpec(Table):
     """Rigid connection of a beam node (or body point) to a body: the body rotates with
-    the beam slope there."""
+    the beam slope there. Without ``local`` the body's centre must start at ``point``
+    (a body placed elsewhere would be welded on through an invisible rigid arm, so it
+    is refused); give ``local`` for an intended arm."""
 
     type: Literal["fixed"] = key(doc="joint type")
     point: PointRef = key(doc="the beam node (or body point) the body is fixed to")
     body: str = key(doc="body name")
-    local: Optional[Vec2] = key(None, unit="m", doc="body point at `point` (default: where `point` starts)")
+    local: Optional[Vec2] = key(None, unit="m", doc="the body point held at `point`, in the body frame (default: "
+                                                    "the centre, which must then start at `point`); give it for "
+                                                    "a rigid arm between the body and the point")
 
 
 class FrictionSpec(Table):
@@ -377,7 +381,8 @@ class TorqueSpec(Table):
 
 
 class SpringDamperSpec(Table):
-    """Linear spring-damper between two points: tension k (ℓ − ℓ₀) + c ℓ̇."""
+    """Linear spring-damper between two points: tension k (ℓ − ℓ₀) + c ℓ̇. The points must
+    start apart (at zero length the spring's direction is undefined: refused)."""
 
     type: Literal["spring_damper"] = key(doc="load type")
     a: PointRef = key(doc="first point")
