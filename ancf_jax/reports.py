@@ -231,8 +231,12 @@ def report_pantograph(run, out_dir: str | Path, *, figures: bool = True, precisi
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     stats = {k: run.statistics[k] for k in STATISTICS_KEYS}
+    # the units convention (README, docs/scenario-format.md): the statistics' keys end
+    # in their unit; what cannot carry one is in the units map
+    units = {"spans_evaluated": "-", "value": "the unit of the row's key", "low": "the unit of the row's key",
+             "high": "the unit of the row's key"}
     data = dict(stats, en50318_2002=against_ranges(stats), window_m=list(run.window),
-                run=run.results.summary())
+                run=run.results.summary(), units=units)
     _json(out / "statistics.json", data)
     write_csv(out / "contact_force.csv", dict(t=run.t, x=run.x, contact_force_N=run.force,
                                               contact_force_filtered_N=run.filtered), precision)

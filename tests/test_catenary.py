@@ -177,11 +177,11 @@ def test_shipped_scenario_is_the_python_model_and_the_cli_writes_the_contract(sm
     tests above), its run ends one span past the evaluated ones, and the CLI's report
     writes statistics.json with the contract's keys, contact_force.csv with its
     columns, and the figures."""
-    import json
-
     from ancf_jax.models.catenary import STATISTICS_KEYS
     from ancf_jax.reports import report_pantograph
     from ancf_jax.scenario import load_scenario
+
+    from .json_units import assert_unit_keys
     sc = load_scenario("pantograph_catenary", SCENARIO_RUN)
     system, state = sc.build()
     m, _ = pantograph_catenary(sc.spec.catenary.design(), sc.spec.pantograph.design(), speed=250 / 3.6)
@@ -192,7 +192,7 @@ def test_shipped_scenario_is_the_python_model_and_the_cli_writes_the_contract(sm
     np.testing.assert_allclose(state.v, ref_state.v, rtol=0, atol=1e-12)
     assert sc.solver.t_end == pytest.approx((min(2 * 10.0 + 10.4166, 30.0 - 1.0) - 0.2) / (250 / 3.6))
     data = report_pantograph(small_runs[1.0], tmp_path)
-    stored = json.loads((tmp_path / "statistics.json").read_text())
+    stored = assert_unit_keys(tmp_path / "statistics.json")
     assert all(k in stored for k in STATISTICS_KEYS) and stored["speed_kmh"] == 250.0 == data["speed_kmh"]
     assert [row["key"] for row in stored["en50318_2002"]][:2] == ["mean_N", "std_N"]
     header = (tmp_path / "contact_force.csv").read_text().splitlines()[0]
