@@ -102,6 +102,14 @@ def describe_point(ref: PointRef) -> str:
     return f"s = {ref.value:g} m on beam {ref.target!r}"
 
 
+#: default constraint residual max|Φ| [m or rad] of an initial state accepted without
+#: position projection, and required after it (:meth:`Model.build`, :func:`assemble_state`)
+ASSEMBLY_TOLERANCE = 1e-10
+
+#: default relative change of a given initial velocity that is warned about
+#: (:func:`project_velocities`, :func:`assemble_state`)
+VELOCITY_WARN_TOLERANCE = 1e-6
+
 #: clamp modes (:class:`ancf_jax.joints.Clamp`)
 CLAMP_MODES = ("full", "direction", "exudyn")
 #: coordinates of a beam node and of a body, in the order of q (:meth:`Model.coordinate`)
@@ -873,7 +881,7 @@ class Model:
                 point(pb, f"member {member!r} of {what}")
 
     def build(self, *, pad_to: dict | int | None = None, hold: bool | None = None,
-              assemble: bool = True, tolerance: float = 1e-10,
+              assemble: bool = True, tolerance: float = ASSEMBLY_TOLERANCE,
               layout: AbstractChainLayout | None = None) -> tuple[System, State]:
         """Resolve names, check the constraints and return ``(system, initial_state)``.
 
@@ -1316,7 +1324,8 @@ def _coordinate_entities(system: System) -> list[str]:
 
 
 def project_velocities(system: System, q, v, t=0.0, *, given=None,
-                       warn_tolerance: float = 1e-6, feasibility_tolerance: float = 1e-8) -> np.ndarray:
+                       warn_tolerance: float = VELOCITY_WARN_TOLERANCE,
+                       feasibility_tolerance: float = 1e-8) -> np.ndarray:
     """Kinetic-energy projection of initial velocities onto Φ_q v + Φ_t = 0.
 
     With M the system mass matrix (bodies diag(m, m, J), beams their consistent mass),
@@ -1437,8 +1446,8 @@ def project_velocities(system: System, q, v, t=0.0, *, given=None,
     return out
 
 
-def assemble_state(system: System, state: State, *, tolerance: float = 1e-10,
-                   given=None, warn_tolerance: float = 1e-6) -> State:
+def assemble_state(system: System, state: State, *, tolerance: float = ASSEMBLY_TOLERANCE,
+                   given=None, warn_tolerance: float = VELOCITY_WARN_TOLERANCE) -> State:
     """Project an initial state onto Φ(q, t) = 0 and then its velocities onto Φ̇ = 0.
 
     Positions (after checking the rank of Φ_q): where max|Φ| exceeds ``tolerance``,
