@@ -139,21 +139,13 @@ def _hermite(nodes, lengths, s):
 
 def _arc_length_at_x(nodes, lengths, x, what: str) -> float:
     """Reference arc length of the point of the Hermite curve at horizontal coordinate
-    x (bisection; the curve's x monotonic), NumPy."""
-    lo, hi = 0.0, float(np.sum(lengths))
-    xa, xb = _hermite(nodes, lengths, lo)[0], _hermite(nodes, lengths, hi)[0]
+    x (Brent's method, ``scipy.optimize.brentq``; the curve's x monotonic), NumPy."""
+    from scipy.optimize import brentq
+    total = float(np.sum(lengths))
+    xa, xb = _hermite(nodes, lengths, 0.0)[0], _hermite(nodes, lengths, total)[0]
     if not min(xa, xb) <= x <= max(xa, xb):
         raise ModelError(f"{what} starts at x = {x:g} m, off the beam (accepted {min(xa, xb):g}..{max(xa, xb):g} m)")
-    sense = np.sign(xb - xa)
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        if sense * (_hermite(nodes, lengths, mid)[0] - x) < 0.0:
-            lo = mid
-        else:
-            hi = mid
-        if hi - lo < 1e-15 * max(1.0, hi):
-            break
-    return 0.5 * (lo + hi)
+    return brentq(lambda s: _hermite(nodes, lengths, s)[0] - x, 0.0, total, xtol=1e-15 * max(1.0, total))
 
 
 NODE_COMPONENTS = ("x", "y", "slope_x", "slope_y")
