@@ -276,31 +276,35 @@ def _catenary(h, va, w, ea, s0):
 
 
 def _s0_at(h, va, w, ea, x):
-    """Unstretched arc length at which the segment reaches horizontal distance x."""
-    s0 = np.asarray(x, float).copy()
-    for _ in range(50):
-        xs, _, dxs, _ = _catenary(h, va, w, ea, s0)
-        step = (xs - x) / dxs
-        s0 = s0 - step
-        if np.all(np.abs(step) <= 1e-15 * (1 + np.abs(s0))):
-            break
-    return s0
+    """Unstretched arc length at which the segment reaches horizontal distance x
+    (Newton's method from s₀ = x, ``scipy.optimize.newton``, elementwise; to steps of
+    1e-13 (1 + |x|): x(s₀) carries rounding of (H/w)·ε ~ 1e-14 m, which Newton's steps
+    cannot go below)."""
+    from scipy.optimize import newton
+    x = np.asarray(x, float)
+    s0 = newton(lambda s: _catenary(h, va, w, ea, s)[0] - x, x.copy(), lambda s: _catenary(h, va, w, ea, s)[2],
+                tol=1e-13 * (1 + np.max(np.abs(x), initial=0.0)), rtol=1e-13, maxiter=50)
+    return np.reshape(s0, x.shape)
 
 
 def _span_between(h, w, ea, dx, dy):
-    """(V_a, s₀ length) of the segment joining two points dx, dy apart (2×2 Newton
-    from the parabola)."""
-    va, s0 = h * dy / dx - 0.5 * w * dx, math.hypot(dx, dy) / (1 + h / ea)
-    for _ in range(50):
+    """(V_a, s₀ length) of the segment joining two points dx, dy apart (MINPACK's
+    hybrid Newton method, ``scipy.optimize.root``, from the parabola)."""
+    from scipy.optimize import root
+
+    def residual(z):
+        va, s0 = z
         x, y, xs, ys = _catenary(h, va, w, ea, s0)
         ty = va + w * s0
         t, ta = math.hypot(h, ty), math.hypot(h, va)
         jac = np.array([[(h / w) * (1 / t - 1 / ta), xs], [s0 / ea + (ty / t - va / ta) / w, ys]])
-        step = np.linalg.solve(jac, [x - dx, y - dy])
-        va, s0 = va - step[0], s0 - step[1]
-        if abs(step[1]) <= 1e-15 * s0 and abs(step[0]) <= 1e-13 * (h + abs(va)):
-            break
-    return va, s0
+        return np.array([x - dx, y - dy]), jac
+
+    guess = [h * dy / dx - 0.5 * w * dx, math.hypot(dx, dy) / (1 + h / ea)]
+    sol = root(residual, guess, jac=True, method="hybr", options=dict(xtol=1e-13))
+    if not sol.success:
+        raise ModelError(f"catenary segment over dx = {dx:g} m, dy = {dy:g} m: {sol.message}")
+    return float(sol.x[0]), float(sol.x[1])
 
 
 class _Wire:
@@ -388,6 +392,7 @@ def design_equilibrium(design: CatenaryDesign) -> DesignEquilibrium:
     V_a at the first pole is found by the secant method so that the span ends at
     the next pole's height. The support reactions are the jumps of T_y at the poles.
     """
+    from scipy.optimize import newton
     design.check()
     x, poles, drops = _mesh_x(design)
     L, p = design.span_length, design.presag
@@ -427,15 +432,7 @@ def design_equilibrium(design: CatenaryDesign) -> DesignEquilibrium:
             return out, rise
 
         a = -0.5 * (wm * L + loads.sum())  # the symmetric guess: half the span's load
-        b = 1.01 * a
-        ra, rb = march(a)[1], march(b)[1]
-        for _ in range(60):
-            if rb == ra:
-                break
-            a, b = b, b - rb * (b - a) / (rb - ra)
-            ra, rb = rb, march(b)[1]
-            if abs(rb) <= 1e-13 * L:
-                break
+        b = newton(lambda va0: march(va0)[1], a, x1=1.01 * a, tol=1e-12, rtol=1e-13, maxiter=60)  # secant
         span, _ = march(b)
         segments += span
         support[k] += -span[0][0]                      # upward pull needed at the first pole
