@@ -383,9 +383,10 @@ def design_equilibrium(design: CatenaryDesign) -> DesignEquilibrium:
     Contact wire: at the droppers at ``height`` less the pre-sag parabola
     4 p ξ(1 − ξ) over each span, pinned at ``height`` at both end poles, carried by
     the droppers alone; each segment between key points is the catenary through
-    both (a 2×2 Newton solve for its V_a and unstretched length). Dropper j pulls it
-    up with F_j = T_y⁻ − T_y⁺ + m_j g (the vertical tension components just left and
-    right of it; m_j the contact clamp plus half the dropper).
+    both (a 2×2 nonlinear solve, ``scipy.optimize.root``, for its V_a and unstretched
+    length). Dropper j pulls it up with F_j = T_y⁻ − T_y⁺ + m_j g (the vertical
+    tension components just left and right of it; m_j the contact clamp plus half the
+    dropper).
 
     Messenger: at ``height + encumbrance`` at the poles, loaded at each dropper by
     P_j = F_j + (messenger clamp + half dropper) g (T_y⁺ = T_y⁻ + P_j); per span,
