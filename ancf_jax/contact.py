@@ -10,13 +10,14 @@ speed v along a track is at x = v t, not at arc length v t). The positions are
 :class:`~ancf_jax.functions.ConstantSpeed`) are data: runs are differentiable with
 respect to them.
 
-Searches on the deformed beam (traced, differentiable, fixed iteration counts, so a
-point crosses nodes without re-tracing):
+Searches on the deformed beam (traced, differentiable, bounded iteration counts, so a
+point crosses nodes without re-tracing; optimistix's Newton root finder, differentiated
+implicitly):
 
 * :func:`arc_length_under`: s with r_x(s) = x. The node interval holding x is found
   from the nodes' x (the beam's x must be monotonic along s over its active nodes,
   as a track, rope or wire is), then Newton's method on r_x(s) − x from the linear
-  interpolation in that interval (:data:`SEARCH_ITERATIONS` steps);
+  interpolation in that interval (at most :data:`SEARCH_ITERATIONS` steps);
 * :func:`closest_arc_length`: the closest point of the beam to a point p, the root of
   f(s) = r'(s)·(r(s) − p) by Newton's method (f' = r''·(r − p) + r'·r') started from
   the point under p. At the closest point the gap's derivative along s vanishes, so a
@@ -55,15 +56,19 @@ from typing import Callable, Optional
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import optimistix as optx
 
 from .forces import AbstractKinkedForce, AbstractLoad
 from .functions import AbstractPath
 from .element.shape_functions import shape_functions, shape_functions_dx
 from .points import AbstractPoint, element_coordinates
 
-#: Newton steps of the searches on the deformed beam (from the linear interpolation in
-#: the node interval: the residual falls below 1e-14 m after 3 on the tests' wires)
+#: most Newton steps of the searches on the deformed beam (from the linear interpolation
+#: in the node interval: the residual falls below 1e-14 m after 3 on the tests' wires)
 SEARCH_ITERATIONS = 4
+
+#: a search stops earlier once its Newton step and residual are below this [m]
+SEARCH_TOLERANCE = 1e-14
 
 
 def _node_interval(system, beam: int, q, x):
@@ -94,28 +99,27 @@ def _closest_residual(e, p, length, u):
     return jnp.dot(shape_functions_dx(u, length) @ e, shape_functions(u, length) @ e - p)
 
 
+class _Residual(eqx.Module):
+    """``residual(e, p, l, u)`` as optimistix's ``fn(u, args)``."""
+
+    residual: Callable
+
+    def __call__(self, u, args):
+        return self.residual(*args, u)
+
+
 def _implicit_root(residual):
-    """Newton's method on ``residual(e, p, l, u) = 0`` for u from u₀
-    (:data:`SEARCH_ITERATIONS` steps), differentiated by the implicit function theorem
-    (du = −∂f/∂(e, p, l)·d(e, p, l) / ∂f/∂u; the start u₀ carries no derivative), so
+    """Newton's method on ``residual(e, p, l, u) = 0`` for u from u₀ (optimistix's
+    :class:`optimistix.Newton`, at most :data:`SEARCH_ITERATIONS` steps), differentiated
+    by the implicit function theorem (:class:`optimistix.ImplicitAdjoint`:
+    du = −∂f/∂(e, p, l)·d(e, p, l) / ∂f/∂u; the start u₀ carries no derivative), so
     derivatives of any order do not pass through the iterations."""
+    fn = _Residual(residual)
 
-    @jax.custom_jvp
     def root(e, p, length, u0):
-        u = u0
-        for _ in range(SEARCH_ITERATIONS):
-            f, f_u = jax.jvp(lambda z: residual(e, p, length, z), (u,), (jnp.ones_like(u),))
-            u = u - f / f_u
-        return u
-
-    @root.defjvp
-    def _jvp(primals, tangents):
-        e, p, length, u0 = primals
-        de, dp, dl, _ = tangents
-        u = root(e, p, length, u0)
-        f_u = jax.jvp(lambda z: residual(e, p, length, z), (u,), (jnp.ones_like(u),))[1]
-        df = jax.jvp(lambda a, b, c: residual(a, b, c, u), (e, p, length), (de, dp, dl))[1]
-        return u, -df / f_u
+        solution = optx.root_find(fn, optx.Newton(rtol=0.0, atol=SEARCH_TOLERANCE), u0, args=(e, p, length),
+                                  adjoint=optx.ImplicitAdjoint(), max_steps=SEARCH_ITERATIONS, throw=False)
+        return solution.value
 
     return root
 

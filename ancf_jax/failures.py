@@ -27,9 +27,18 @@ class Failure(enum.IntEnum):
     ``LEFT_BEAM``             ``left_beam``         a sliding joint off its beam
     ``SLIDING_JUMP``          ``sliding_jump``      a sliding joint jumped in one step
     ``ADAPTIVE``              ``solver``            an adaptive (diffrax) solver failed
+                                                    otherwise (a linear or nonlinear
+                                                    solve inside it)
     ``INTERRUPTED``           ``interrupted``       stopped by the user (Ctrl-C) at a
                                                     chunk boundary
+    ``MAX_STEPS``             ``max_steps``         an adaptive solver used up its
+                                                    ``max_steps`` in an output chunk
+    ``STEP_SIZE``             ``step_size``         an adaptive solver's step fell
+                                                    below its minimum
     ========================  ====================  ==================================
+
+    An adaptive solve's outcome (diffrax's ``RESULTS``) maps to a member by
+    :func:`ancf_jax.integrate.adaptive_failure`.
 
     ``NAN``, ``NEWTON`` and ``SLIDING_JUMP`` are the failures a smaller step can cure
     (:attr:`retryable`): the fixed-step loop redoes such a step in substeps.
@@ -45,6 +54,8 @@ class Failure(enum.IntEnum):
     SLIDING_JUMP = 5
     ADAPTIVE = 6
     INTERRUPTED = 7
+    MAX_STEPS = 8
+    STEP_SIZE = 9
 
     @property
     def reason(self) -> str:
@@ -86,6 +97,8 @@ _REASONS = {
     Failure.SLIDING_JUMP: "sliding_jump",
     Failure.ADAPTIVE: "solver",
     Failure.INTERRUPTED: "interrupted",
+    Failure.MAX_STEPS: "max_steps",
+    Failure.STEP_SIZE: "step_size",
 }
 
 _MESSAGES = {
@@ -99,9 +112,13 @@ _MESSAGES = {
     Failure.SLIDING_JUMP: ("a sliding joint moved more than {max_sliding_step:g} of an element length in "
                            "one step: the Newton iteration found a spurious solution (reduce dt, or raise "
                            "rho_inf towards 1)"),
-    Failure.ADAPTIVE: ("the adaptive {solver} solver failed (step size underflow, max_steps = {max_steps} "
-                       "reached, or NaN)"),
+    Failure.ADAPTIVE: "the adaptive {solver} solver failed (a linear or nonlinear solve inside it failed)",
     Failure.INTERRUPTED: "interrupted (Ctrl-C); the results up to then are kept",
+    Failure.MAX_STEPS: ("the adaptive {solver} solver took max_steps = {max_steps} steps without reaching the "
+                        "end of an output chunk (raise max_steps; steps this small mean a stiff system, for "
+                        "which an implicit solver suits)"),
+    Failure.STEP_SIZE: ("the adaptive {solver} solver's step size fell below its minimum (the system is too "
+                        "stiff or not smooth enough for it)"),
 }
 
 _CONTEXT_DEFAULTS = dict(drift_tolerance=float("nan"), max_sliding_step=float("nan"),

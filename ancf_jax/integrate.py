@@ -15,7 +15,8 @@ sliding coordinate that moved more than ``max_sliding_step`` of an element in on
 i.e. a spurious Newton solution (SLIDING_JUMP; retried in substeps like a Newton
 failure). After
 the first failure the state is frozen at the last good step and the failure time is
-recorded; :mod:`ancf_jax.simulation` turns that into an error.
+recorded; :mod:`ancf_jax.simulation` turns that into an error. The outcome of an
+adaptive (diffrax) solve maps to a failure here too (:func:`adaptive_failure`).
 
 Node crossings of sliding joints and kinks of force laws. The curvature of the cubic
 interpolation jumps at nodes, so the acceleration and the joint reaction jump when a
@@ -37,6 +38,7 @@ the node to a fraction 1e-9 of an element in ~6.
 
 from __future__ import annotations
 
+import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -191,6 +193,24 @@ def step_status(system: System, old: Carry | None, new: Carry, converged, option
         length = system.beams[b].mesh.length
         out = (s < 0.0) | (s > length)
         code = jnp.where((code == Failure.OK) & out, Failure.LEFT_BEAM, code)
+    return code
+
+
+#: the :class:`~ancf_jax.failures.Failure` of each outcome of a diffrax solve (by the
+#: name of its ``diffrax.RESULTS`` member); any other outcome (a failed linear or
+#: nonlinear solve inside the solver) is ADAPTIVE
+ADAPTIVE_FAILURES = {"successful": Failure.OK, "event_occurred": Failure.OK,
+                     "max_steps_reached": Failure.MAX_STEPS, "max_steps_rejected": Failure.MAX_STEPS,
+                     "dt_min_reached": Failure.STEP_SIZE, "nonfinite": Failure.NAN,
+                     "nonfinite_input": Failure.NAN}
+
+
+def adaptive_failure(result):
+    """:class:`~ancf_jax.failures.Failure` code (traced int) of a diffrax solve's
+    ``result`` (a ``diffrax.RESULTS`` item): :data:`ADAPTIVE_FAILURES`, else ADAPTIVE."""
+    code = jnp.asarray(Failure.ADAPTIVE)
+    for name, failure in ADAPTIVE_FAILURES.items():
+        code = jnp.where(result == getattr(diffrax.RESULTS, name), failure, code)
     return code
 
 

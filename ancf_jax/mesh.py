@@ -152,12 +152,36 @@ def _hermite_arc_length(e, length):
     return length * jnp.dot(jnp.asarray(w), jnp.sqrt(jnp.sum(r1 * r1, axis=1)))
 
 
+#: the length l of a Hermite element through given points and unit slopes is the fixed
+#: point l = (arc length of its cubic with parameter length l), found from the chord by
+#: fixed-point iteration to this relative change (at most LENGTH_ITERATIONS steps)
+LENGTH_TOLERANCE = 1e-14
+LENGTH_ITERATIONS = 50
+
+
+def element_length(arc_length, chord: float, where: str = "an element") -> float:
+    """The fixed point l = ``arc_length(l)`` [m] from l = ``chord``
+    (``scipy.optimize.fixed_point``, plain iteration, :data:`LENGTH_TOLERANCE`).
+
+    Raises:
+        ModelError: no convergence in :data:`LENGTH_ITERATIONS` steps (the slopes turn
+            too far within the element; more points help).
+    """
+    from scipy.optimize import fixed_point
+    try:
+        return float(fixed_point(arc_length, chord, xtol=LENGTH_TOLERANCE, maxiter=LENGTH_ITERATIONS,
+                                 method="iteration"))
+    except RuntimeError:
+        raise ModelError(f"the length of {where} did not converge in {LENGTH_ITERATIONS} fixed-point "
+                         "iterations: its slopes turn too far within it (give more points)") from None
+
+
 def through_points(points, slopes, *, n_max=None) -> BeamMesh:
     """A beam whose stress-free reference passes through given points with given slopes.
 
     Element k joins points k and k+1. Slopes are normalized to unit tangents and each
     element length is the arc length of the Hermite cubic through its end points
-    (fixed-point iteration), so the element parameter is close to arc length. Use this
+    (:func:`element_length`), so the element parameter is close to arc length. Use this
     for initially curved beams: the reference is stress-free.
 
     Args:
@@ -179,14 +203,8 @@ def through_points(points, slopes, *, n_max=None) -> BeamMesh:
         chord = np.linalg.norm(p[k + 1] - p[k])
         if chord == 0.0:
             raise ModelError(f"points {k} and {k + 1} coincide: element lengths must be > 0")
-        l = chord
         e = jnp.asarray(np.concatenate([p[k], t[k], p[k + 1], t[k + 1]]))
-        for _ in range(50):
-            l_new = float(_hermite_arc_length(e, l))
-            if abs(l_new - l) < 1e-14 * l:
-                break
-            l = l_new
-        lengths.append(l)
+        lengths.append(element_length(lambda l: float(_hermite_arc_length(e, l)), chord, f"element {k}"))
     nodes = np.column_stack([p, t])
     return _finish(np.array(lengths), nodes, n_max)
 
@@ -235,14 +253,15 @@ def catenary_nodes(start, end, length, n_elements) -> np.ndarray:
         raise ModelError("catenary: end must lie to the right of start (x1 > x0)")
     if length <= np.hypot(dx, dy) * (1 + 1e-12):
         raise ModelError(f"catenary: length {length:g} m must exceed the chord {np.hypot(dx, dy):g} m")
+    from scipy.optimize import brentq
     target = np.sqrt(length**2 - dy**2)
-    lo, hi = 1e-6 * dx, 1e6 * dx  # 2a sinh(dx/2a) decreases from ∞ to dx as a grows
-    for _ in range(200):
-        a = np.sqrt(lo * hi)
-        if 2 * a * np.sinh(dx / (2 * a)) > target:
-            lo = a
-        else:
-            hi = a
+    # the parameter a: 2a sinh(dx/2a) = target (decreasing from ∞ to dx as a grows); in
+    # u = dx/2a, r = target/dx: sinh(u)/u = r, which is <= r at u = acosh(r) (sinh u <= u
+    # cosh u) and >= r at u = 2 acosh(r) + 2
+    r = target / dx
+    u_lo, u_hi = np.arccosh(r), 2.0 * np.arccosh(r) + 2.0
+    a = brentq(lambda a: 2 * a * np.sinh(dx / (2 * a)) - target, dx / (2 * u_hi), dx / (2 * u_lo),
+               xtol=1e-300, rtol=4 * np.finfo(float).eps)
     xc = 0.5 * (p0[0] + p1[0]) - a * np.arcsinh(dy / target)
     yc = p0[1] - a * np.cosh((p0[0] - xc) / a)
     s = np.linspace(0.0, length, n + 1)

@@ -102,6 +102,14 @@ def describe_point(ref: PointRef) -> str:
     return f"s = {ref.value:g} m on beam {ref.target!r}"
 
 
+#: default constraint residual max|Φ| [m or rad] of an initial state accepted without
+#: position projection, and required after it (:meth:`Model.build`, :func:`assemble_state`)
+ASSEMBLY_TOLERANCE = 1e-10
+
+#: default relative change of a given initial velocity that is warned about
+#: (:func:`project_velocities`, :func:`assemble_state`)
+VELOCITY_WARN_TOLERANCE = 1e-6
+
 #: clamp modes (:class:`ancf_jax.joints.Clamp`)
 CLAMP_MODES = ("full", "direction", "exudyn")
 #: coordinates of a beam node and of a body, in the order of q (:meth:`Model.coordinate`)
@@ -131,21 +139,13 @@ def _hermite(nodes, lengths, s):
 
 def _arc_length_at_x(nodes, lengths, x, what: str) -> float:
     """Reference arc length of the point of the Hermite curve at horizontal coordinate
-    x (bisection; the curve's x monotonic), NumPy."""
-    lo, hi = 0.0, float(np.sum(lengths))
-    xa, xb = _hermite(nodes, lengths, lo)[0], _hermite(nodes, lengths, hi)[0]
+    x (Brent's method, ``scipy.optimize.brentq``; the curve's x monotonic), NumPy."""
+    from scipy.optimize import brentq
+    total = float(np.sum(lengths))
+    xa, xb = _hermite(nodes, lengths, 0.0)[0], _hermite(nodes, lengths, total)[0]
     if not min(xa, xb) <= x <= max(xa, xb):
         raise ModelError(f"{what} starts at x = {x:g} m, off the beam (accepted {min(xa, xb):g}..{max(xa, xb):g} m)")
-    sense = np.sign(xb - xa)
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        if sense * (_hermite(nodes, lengths, mid)[0] - x) < 0.0:
-            lo = mid
-        else:
-            hi = mid
-        if hi - lo < 1e-15 * max(1.0, hi):
-            break
-    return 0.5 * (lo + hi)
+    return brentq(lambda s: _hermite(nodes, lengths, s)[0] - x, 0.0, total, xtol=1e-15 * max(1.0, total))
 
 
 NODE_COMPONENTS = ("x", "y", "slope_x", "slope_y")
@@ -873,7 +873,7 @@ class Model:
                 point(pb, f"member {member!r} of {what}")
 
     def build(self, *, pad_to: dict | int | None = None, hold: bool | None = None,
-              assemble: bool = True, tolerance: float = 1e-10,
+              assemble: bool = True, tolerance: float = ASSEMBLY_TOLERANCE,
               layout: AbstractChainLayout | None = None) -> tuple[System, State]:
         """Resolve names, check the constraints and return ``(system, initial_state)``.
 
@@ -1316,7 +1316,8 @@ def _coordinate_entities(system: System) -> list[str]:
 
 
 def project_velocities(system: System, q, v, t=0.0, *, given=None,
-                       warn_tolerance: float = 1e-6, feasibility_tolerance: float = 1e-8) -> np.ndarray:
+                       warn_tolerance: float = VELOCITY_WARN_TOLERANCE,
+                       feasibility_tolerance: float = 1e-8) -> np.ndarray:
     """Kinetic-energy projection of initial velocities onto Φ_q v + Φ_t = 0.
 
     With M the system mass matrix (bodies diag(m, m, J), beams their consistent mass),
@@ -1437,8 +1438,8 @@ def project_velocities(system: System, q, v, t=0.0, *, given=None,
     return out
 
 
-def assemble_state(system: System, state: State, *, tolerance: float = 1e-10,
-                   given=None, warn_tolerance: float = 1e-6) -> State:
+def assemble_state(system: System, state: State, *, tolerance: float = ASSEMBLY_TOLERANCE,
+                   given=None, warn_tolerance: float = VELOCITY_WARN_TOLERANCE) -> State:
     """Project an initial state onto Φ(q, t) = 0 and then its velocities onto Φ̇ = 0.
 
     Positions (after checking the rank of Φ_q): where max|Φ| exceeds ``tolerance``,

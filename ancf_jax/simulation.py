@@ -39,8 +39,8 @@ import numpy as np
 
 from . import _memory
 from .errors import ModelError, SimulationError, SimulationInterrupted
-from .integrate import (DEFAULT_DT, DEFAULT_HALVINGS, Checkpoint, LoopState, RunOptions, initial_loop,
-                        integrate_fixed, segment_of, sliding_beams)
+from .integrate import (DEFAULT_DT, DEFAULT_HALVINGS, Checkpoint, LoopState, RunOptions, adaptive_failure,
+                        initial_loop, integrate_fixed, segment_of, sliding_beams)
 from .failures import Failure
 from .integrators.base import AbstractAdaptiveSolver, AbstractIntegrator, AbstractSolver, Carry
 from .integrators.diffrax_solvers import KINDS as DIFFRAX_KINDS
@@ -607,9 +607,9 @@ def _shard(tree, devices, batch: int):
 
 @eqx.filter_jit
 def _adaptive_chunk(system, solver, context, y0, t0, ts, dt0):
-    (q, v, w), ok, steps = solver.solve(system, context, y0, t0, ts, dt0)
+    (q, v, w), result, steps = solver.solve(system, context, y0, t0, ts, dt0)
     acc, lam = solver.multipliers(system, context, q, v, ts)
-    return q, v, w, acc, lam, ok, steps
+    return q, v, w, acc, lam, adaptive_failure(result), steps
 
 
 def _simulate_adaptive(system, state, solver, t0, n_int, out_dt, dt, per_chunk, n_chunks, options,
@@ -641,14 +641,15 @@ def _simulate_adaptive(system, state, solver, t0, n_int, out_dt, dt, per_chunk, 
     try:
         for c in range(n_chunks):
             ts = ts_all[c * per_chunk:(c + 1) * per_chunk]
-            q, v, w, acc, lam, ok, nsteps = chunk_c(system, solver, context, y, jnp.asarray(t_start),
-                                                    jnp.asarray(ts), jnp.asarray(dt))
+            q, v, w, acc, lam, failure, nsteps = chunk_c(system, solver, context, y, jnp.asarray(t_start),
+                                                         jnp.asarray(ts), jnp.asarray(dt))
             codes = np.asarray(status_fn(system, q, v, lam, jnp.asarray(ts)))
-            if not bool(ok):
+            if int(failure) != Failure.OK:
+                # the rows diffrax did not reach are not finite: the solver's failure
                 bad = ~np.all(np.isfinite(np.asarray(q)), axis=1)
-                codes = np.where(bad & (codes == Failure.OK), Failure.ADAPTIVE, codes)
+                codes = np.where(bad, int(failure), codes)
                 if np.all(codes == Failure.OK):
-                    codes[-1] = Failure.ADAPTIVE
+                    codes[-1] = int(failure)
             keep = len(ts) if np.all(codes == Failure.OK) else int(np.argmax(codes != Failure.OK))
             chunk = [np.asarray(arr)[:keep] for arr in (ts, q, v, acc, lam, w)] + [np.zeros(keep, int)]
             for k, arr in zip(("t", "q", "v", "acc", "lam", "work", "iterations"), chunk):

@@ -239,6 +239,40 @@ def test_failure_messages_name_the_solver():
     assert "tsit5" in Failure.ADAPTIVE.explanation(solver="tsit5", max_steps=10)
 
 
+def test_every_failure_has_a_reason_and_a_message():
+    reasons = [member.reason for member in Failure]
+    assert len(set(reasons)) == len(Failure) and all(reasons)
+    for member in Failure:
+        assert Failure.from_reason(member.reason) is member
+        text = member.message(0.5, solver="tsit5", max_steps=7, drift_tolerance=1e-6, max_sliding_step=0.5)
+        assert text.startswith("simulation stopped at t = 0.5 s: ") and "{" not in text and "\n" not in text
+
+
+def test_diffrax_outcomes_map_to_failures():
+    """Each diffrax.RESULTS member maps to a Failure (unlisted ones: ADAPTIVE)."""
+    import diffrax
+
+    from ancf_jax.integrate import ADAPTIVE_FAILURES, adaptive_failure
+    names = list(diffrax.RESULTS._name_to_item)
+    assert set(ADAPTIVE_FAILURES) <= set(names)
+    for name in names:
+        expected = ADAPTIVE_FAILURES.get(name, Failure.ADAPTIVE)
+        assert int(adaptive_failure(getattr(diffrax.RESULTS, name))) == expected, name
+
+
+def test_adaptive_run_out_of_steps_says_so():
+    """A tsit5 run allowed 3 steps per output chunk stops with reason max_steps and the
+    message naming the limit (not nan: the rows diffrax did not reach are not finite),
+    keeping the rows before."""
+    sc = pendulum()
+    system, state = sc.build()
+    kw = {**sc.solver.simulate_kwargs(), "solver": "tsit5", "solver_options": {"max_steps": 3}}
+    res = simulation.simulate(system, state, **kw, on_failure="return", progress=False)
+    assert res.status == "max_steps" == Failure.MAX_STEPS.reason
+    assert "adaptive tsit5 solver took max_steps = 3 steps" in res.message
+    assert len(res.t) >= 1 and np.all(np.isfinite(res.q)) and res.failure_time > 0.0
+
+
 # ------------------------------------------------------------------ 5. silent acceptances
 def test_zero_length_ramp_is_refused(capsys):
     load = 'loads.spin={type="torque", body="tip", torque=1.0, time_function="ramp(t, 1, 1)"}'

@@ -43,6 +43,10 @@ from ..errors import ModelError
 #: mean-stress corrections
 CORRECTIONS = ("none", "goodman", "gerber")
 
+#: the shape of the Eurocode 3 curves (EN 1993-1-9 Fig. 7.1; :meth:`SNCurve.eurocode`):
+#: slope 3 through N_C = 2·10⁶, slope 5 from the knee at 5·10⁶, cut-off at 10⁸ cycles
+EUROCODE = dict(reference_cycles=2e6, m1=3.0, knee_cycles=5e6, m2=5.0, cutoff_cycles=1e8)
+
 
 class SNCurve(eqx.Module):
     """An S–N curve with two slopes, a knee and a cut-off (module docstring; final).
@@ -88,7 +92,7 @@ class SNCurve(eqx.Module):
     def eurocode(cls, detail_category):
         """Eurocode 3 curve of detail category Δσ_C [Pa] (EN 1993-1-9 Fig. 7.1): m = 3
         to 5·10⁶ cycles, m = 5 to the cut-off at 10⁸ cycles."""
-        return cls(detail_category, 2e6, 3.0, 5e6, 5.0, 1e8)
+        return cls(detail_category, **EUROCODE)
 
     @classmethod
     def power_law(cls, m, k, endurance_limit=None):

@@ -64,6 +64,18 @@ ZERO_START = {"alpha": 1e-2, "beta": 1e-5}
 #: RMS residual / RMS data value below which the fit has reproduced the data exactly
 ZERO_RESIDUAL = 1e-12
 
+# the defaults of fit and fit_batch (the stopping rule of the module docstring)
+#: default ``xtol``: relative change of every free p in an accepted step
+XTOL = 1e-8
+#: default ``ftol``: relative loss decrease of an accepted step
+FTOL = 1e-10
+#: default ``gtol``: largest |cos| between a free Jacobian column and the residual
+GTOL = 1e-10
+#: default ``learning_rate`` of Adam (step in log-parameters)
+LEARNING_RATE = 0.05
+#: default ``max_iterations`` of each method (and of a given optax optimizer: "adam")
+MAX_ITERATIONS = {"lm": 50, "adam": 500}
+
 
 def _progress_line(it: int, cost: np.ndarray, p: np.ndarray, names, active: np.ndarray) -> str:
     best = int(np.argmin(cost))
@@ -346,8 +358,8 @@ def _initial(problem: Problem, init, free) -> np.ndarray:
 
 def fit(problem: Problem, data: Measurements, init: dict | Sequence[float] | None = None, *,
         free: Sequence[str] | None = None, window: tuple | None = None, method: str = "lm",
-        max_iterations: int | None = None, xtol: float = 1e-8, ftol: float = 1e-10, gtol: float = 1e-10,
-        learning_rate: float = 0.05, optimizer=None, progress=False, noise: Optional[float] = None,
+        max_iterations: int | None = None, xtol: float = XTOL, ftol: float = FTOL, gtol: float = GTOL,
+        learning_rate: float = LEARNING_RATE, optimizer=None, progress=False, noise: Optional[float] = None,
         discretization: bool = False, refine: bool = True, refine_budget: int = 2,
         shift_limit: float = 0.3, refine_axes: Sequence[str] = ("step", "mesh")) -> FitResult:
     """Fit the problem's parameters to one data set.
@@ -361,7 +373,8 @@ def fit(problem: Problem, data: Measurements, init: dict | Sequence[float] | Non
             their initial values (which may be 0), using the same compiled program.
         window: (t_start, t_end) [s]: fit only the samples in this time window.
         method: ``"lm"`` (Levenberg–Marquardt, default) or ``"adam"`` (optax).
-        max_iterations: default 50 (LM) or 500 (adam).
+        max_iterations: default :data:`MAX_ITERATIONS` of the method (50 for LM, 500
+            for adam or a given optimizer).
         xtol: stopping tolerance on the change of the log-parameters θ (module docstring).
         ftol: stopping tolerance on the relative loss decrease (module docstring).
         gtol: stopping tolerance on |cos| between Jacobian columns and residuals (module docstring).
@@ -399,8 +412,8 @@ def fit(problem: Problem, data: Measurements, init: dict | Sequence[float] | Non
 
 def fit_batch(problem: Problem, datasets: Sequence[Measurements], inits: Sequence | None = None, *,
               free: Sequence[str] | None = None, window: tuple | None = None, method: str = "lm",
-              max_iterations: int | None = None, xtol: float = 1e-8, ftol: float = 1e-10,
-              gtol: float = 1e-10, learning_rate: float = 0.05, optimizer=None,
+              max_iterations: int | None = None, xtol: float = XTOL, ftol: float = FTOL,
+              gtol: float = GTOL, learning_rate: float = LEARNING_RATE, optimizer=None,
               progress=False, noise: Optional[float] = None) -> list[FitResult]:
     """Several fits under one ``vmap``: several data sets (one initial guess), several
     initial guesses (one data set), or pairs of both (equal counts). Data sets may have
@@ -419,7 +432,8 @@ def fit_batch(problem: Problem, datasets: Sequence[Measurements], inits: Sequenc
     b = max(len(datasets), len(p0))
     p0 = np.broadcast_to(p0, (b, p0.shape[1])).copy()
     if max_iterations is None:
-        max_iterations = 500 if (method == "adam" or optimizer is not None) else 50
+        # (an unknown method is refused by _fit)
+        max_iterations = MAX_ITERATIONS.get("adam" if optimizer is not None else method, MAX_ITERATIONS["lm"])
     return _fit(problem, datasets, p0, free, method=method, max_iterations=int(max_iterations),
                 xtol=xtol, ftol=ftol, gtol=gtol, learning_rate=learning_rate, optimizer=optimizer,
                 progress=progress, noise=None if noise is None else check_positive("noise", noise, "output units"))

@@ -45,7 +45,7 @@ from ..errors import ModelError
 from ..failures import Failure
 from ..integrators.base import AbstractIntegrator
 from ..outputs import POSITION_KINDS, Output, output_value
-from ..simulation import compiled, make_solver, trajectory
+from ..simulation import DEFAULT_SOLVER, compiled, make_solver, trajectory
 from ..system import State, System
 from . import parameters as P
 from .data import DataError, Measurements
@@ -249,7 +249,7 @@ class Problem:
     """
 
     def __init__(self, system: System, state: State, params=("alpha", "beta"), output: Output | None = None,
-                 *, dt: float, t_end: float, solver="generalized-alpha", solver_options: dict | None = None,
+                 *, dt: float, t_end: float, solver=DEFAULT_SOLVER, solver_options: dict | None = None,
                  name: str = "", nuisance: Sequence[str] = (), max_time_offset: float = MAX_TIME_OFFSET):
         from ..validation import check_positive
         self.system, self.state = system, state

@@ -95,7 +95,9 @@ class AbstractAdaptiveSolver(AbstractSolver):
     :func:`~ancf_jax.simulation.trajectory`, not batched).
 
     The state is y = (q, v, work); ``solve`` integrates from t0 and saves at ``ts``,
-    returning ``(ys, ok, steps)``; ``multipliers`` gives accelerations and multipliers
+    returning ``(ys, result, steps)`` (``result`` a ``diffrax.RESULTS`` item, mapped to a
+    :class:`~ancf_jax.failures.Failure` by :func:`ancf_jax.integrate.adaptive_failure`);
+    ``multipliers`` gives accelerations and multipliers
     at saved states.
     """
 
@@ -103,7 +105,7 @@ class AbstractAdaptiveSolver(AbstractSolver):
 
     @abc.abstractmethod
     def solve(self, system, context, y0, t0, ts, dt0):
-        """((q, v, work) at ``ts``, whether the solve succeeded, steps taken)."""
+        """((q, v, work) at ``ts``, the solve's ``diffrax.RESULTS``, steps taken)."""
 
     @abc.abstractmethod
     def multipliers(self, system, context, q, v, t):

@@ -71,15 +71,15 @@ class DiffraxSolver(AbstractAdaptiveSolver):
         return f
 
     def solve(self, system, context, y0, t0, ts, dt0):
-        """Integrate from t0 and save at ``ts``: ((q, v, work) at ``ts``, whether
-        diffrax finished successfully, steps taken)."""
+        """Integrate from t0 and save at ``ts``: ((q, v, work) at ``ts`` (not finite
+        past a failure), diffrax's ``RESULTS``, steps taken)."""
         term = diffrax.ODETerm(self.vector_field(system, context))
         sol = diffrax.diffeqsolve(
             term, self.diffrax_solver(), t0=t0, t1=ts[-1], dt0=dt0, y0=y0,
             saveat=diffrax.SaveAt(ts=ts),
             stepsize_controller=diffrax.PIDController(rtol=self.rtol, atol=self.atol),
             max_steps=self.max_steps, throw=False)
-        return sol.ys, sol.result == diffrax.RESULTS.successful, sol.stats["num_steps"]
+        return sol.ys, sol.result, sol.stats["num_steps"]
 
     def multipliers(self, system, context, q, v, t):
         """Accelerations and multipliers at saved states (vmapped), for the outputs."""

@@ -24,18 +24,16 @@ _DN = np.stack([np.polynomial.polynomial.polyval(_XI, np.polynomial.polynomial.p
 
 def hermite_length(p0, t0, p1, t1) -> float:
     """Arc length [m] of the cubic Hermite element through p0, p1 with unit tangents
-    t0, t1 whose parameter length equals its arc length (the fixed point used by
-    :func:`ancf_jax.mesh.through_points`)."""
+    t0, t1 whose parameter length equals its arc length (the fixed point of
+    :func:`ancf_jax.mesh.element_length`, as :func:`ancf_jax.mesh.through_points`)."""
     p0, t0, p1, t1 = (np.asarray(a, float) for a in (p0, t0, p1, t1))
-    length = float(np.linalg.norm(p1 - p0))
-    for _ in range(50):
+
+    def arc_length(length):
         d = (_DN[:, 0:1] * p0 + length * _DN[:, 1:2] * t0 + _DN[:, 2:3] * p1
              + length * _DN[:, 3:4] * t1)
-        new = float(np.dot(_W, np.linalg.norm(d, axis=1)))
-        if abs(new - length) < 1e-14 * length:
-            return new
-        length = new
-    return length
+        return float(np.dot(_W, np.linalg.norm(d, axis=1)))
+
+    return _mesh.element_length(arc_length, float(np.linalg.norm(p1 - p0)))
 
 
 def unit_slopes(slopes) -> np.ndarray:

@@ -17,18 +17,19 @@ from typing import Annotated, ClassVar, Literal, Optional, Union
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from ..element.strain_energy import AXIAL_STRAINS, CURVATURES
+from ..element.strain_energy import AXIAL_STRAINS, CURVATURES, Formulation
 from ..fatigue.analysis import METHODS as FATIGUE_METHODS
-from ..fatigue.sn import CORRECTIONS
+from ..fatigue.sn import CORRECTIONS, EUROCODE
 from ..fatigue.stress import LAYOUTS
 from ..outputs import COMPONENTS, DERIVATIVES
 from ..integrate import DEFAULT_DT, RunOptions
 from ..integrators.diffrax_solvers import DiffraxSolver
 from ..integrators.generalized_alpha import GeneralizedAlpha
 from ..integrators.explicit import RK4
-from ..models.catenary import CatenaryDesign, PantographDesign, Wire
+from ..models.catenary import CUTOFF, CatenaryDesign, PantographDesign, Wire
 from ..newton import ModifiedNewton
-from ..simulation import SOLVERS
+from ..simulation import DEFAULT_SOLVER, SOLVERS
+from ..sliding import DEFAULT_REGULARIZATION
 from .types import Nodes4, Numbers, Points2, Quadrature, Side, TimeFunction, Vec2
 
 #: current version of the file format
@@ -131,11 +132,11 @@ class SectionSpec(Table):
 class FormulationSpec(Table):
     """Strain measures and quadrature rules of the element energy (paper Eq. 8)."""
 
-    axial_strain: Literal[AXIAL_STRAINS] = key("green_lagrange", doc="axial strain measure")
-    curvature: Literal[CURVATURES] = key("exact", doc="curvature: exact (Eq. 16), material, "
-                                                      "small_strain (Eq. 17, straight beams only)")
-    axial_quadrature: Quadrature = key(("lobatto", 3), doc="[kind, points] of the axial term")
-    bending_quadrature: Quadrature = key(("gauss", 3), doc="[kind, points] of the bending term")
+    axial_strain: Literal[AXIAL_STRAINS] = key(Formulation.axial_strain, doc="axial strain measure")
+    curvature: Literal[CURVATURES] = key(Formulation.curvature, doc="curvature: exact (Eq. 16), material, "
+                                                                   "small_strain (Eq. 17, straight beams only)")
+    axial_quadrature: Quadrature = key(Formulation.axial_quadrature, doc="[kind, points] of the axial term")
+    bending_quadrature: Quadrature = key(Formulation.bending_quadrature, doc="[kind, points] of the bending term")
 
 
 class LinearLawSpec(Table):
@@ -287,7 +288,7 @@ class FrictionSpec(Table):
     ``JOINT.friction``)."""
 
     mu: float = key(unit="-", ge=0.0, allow_inf_nan=False, doc="friction coefficient μ")
-    regularization: float = key(1e-3, unit="m/s", gt=0.0, allow_inf_nan=False,
+    regularization: float = key(DEFAULT_REGULARIZATION, unit="m/s", gt=0.0, allow_inf_nan=False,
                                 doc="v_ε: a body held by friction creeps at v_ε artanh(F/(μN))")
     viscous: float = key(0.0, unit="N·s/m", ge=0.0, allow_inf_nan=False, doc="c, a viscous part")
 
@@ -579,7 +580,7 @@ class PantographSpec(Table):
                                      "distance)")
     spans: Optional[list[int]] = key(None, doc="[first, last] evaluated span, 1-based (default the two "
                                                "central spans of four or more, else the last)")
-    cutoff: float = key(20.0, unit="Hz", gt=0.0, allow_inf_nan=False, doc="low-pass cut-off of the statistics")
+    cutoff: float = key(CUTOFF, unit="Hz", gt=0.0, allow_inf_nan=False, doc="low-pass cut-off of the statistics")
 
     def design(self) -> PantographDesign:
         """The builder's :class:`~ancf_jax.models.catenary.PantographDesign`."""
@@ -687,7 +688,7 @@ class SolverSpec(Table):
     options table; only the chosen solver's table is used, so `--set solver.name=...`
     switches solvers without editing the file."""
 
-    name: Literal[SOLVERS] = key("generalized-alpha", doc="time integrator")
+    name: Literal[SOLVERS] = key(DEFAULT_SOLVER, doc="time integrator")
     dt: float = key(DEFAULT_DT, unit="s", gt=0.0, allow_inf_nan=False,
                     doc="step (fixed-step solvers) or initial step (adaptive)")
     t_end: float = key(unit="s", gt=0.0, allow_inf_nan=False, doc="end time; the run starts at t = 0")
@@ -878,11 +879,11 @@ class SNCurveSpec(Table):
 
     reference_range: float = key(160e6, unit="Pa", gt=0.0, allow_inf_nan=False,
                                  doc="Δσ_C, the range at reference_cycles (the Eurocode detail category)")
-    reference_cycles: float = key(2e6, gt=0.0, allow_inf_nan=False, doc="N_C")
-    m1: float = key(3.0, gt=0.0, allow_inf_nan=False, doc="first slope")
-    knee_cycles: float = key(5e6, gt=0.0, doc="N_D, start of the second slope (inf: one slope)")
-    m2: float = key(5.0, gt=0.0, doc="second slope (inf: endurance limit at the knee)")
-    cutoff_cycles: float = key(1e8, gt=0.0, doc="N_L, no damage below its range (inf: no cut-off)")
+    reference_cycles: float = key(EUROCODE["reference_cycles"], gt=0.0, allow_inf_nan=False, doc="N_C")
+    m1: float = key(EUROCODE["m1"], gt=0.0, allow_inf_nan=False, doc="first slope")
+    knee_cycles: float = key(EUROCODE["knee_cycles"], gt=0.0, doc="N_D, start of the second slope (inf: one slope)")
+    m2: float = key(EUROCODE["m2"], gt=0.0, doc="second slope (inf: endurance limit at the knee)")
+    cutoff_cycles: float = key(EUROCODE["cutoff_cycles"], gt=0.0, doc="N_L, no damage below its range (inf: no cut-off)")
 
 
 class ConcentrationSpec(Table):

@@ -60,3 +60,39 @@ def test_flat_solver_options_configure_the_composed_solver():
     assert isinstance(make_solver("generalized-alpha").linear_solver, AutoSaddleSolver)
     with pytest.raises(ModelError, match="linear_solver must be one of auto, bordered, dense"):
         make_solver("rk4", linear_solver="sparse")
+
+
+def test_defaults_are_written_once():
+    """The schema's defaults are read from the classes and functions they configure
+    (and the functions that share a default read one constant)."""
+    import importlib
+    import inspect
+
+    from ancf_jax.element.strain_energy import Formulation
+    from ancf_jax.fatigue.sn import SNCurve
+    fitting = importlib.import_module("ancf_jax.identification.fit")  # the module (the package exports fit)
+    from ancf_jax.integrate import DEFAULT_DT, RunOptions
+    from ancf_jax.model import Model, assemble_state
+    from ancf_jax.models import catenary
+    from ancf_jax.simulation import DEFAULT_SOLVER, simulate
+    from ancf_jax.sliding import DEFAULT_REGULARIZATION
+
+    def default(function, name):
+        return inspect.signature(function).parameters[name].default
+
+    solver = schema.SolverSpec.model_fields
+    assert solver["name"].default == DEFAULT_SOLVER == default(simulate, "solver")
+    assert solver["dt"].default == DEFAULT_DT
+    for name in ("drift_tolerance", "locate_crossings"):
+        assert solver[name].default == getattr(RunOptions(), name) == default(simulate, name)
+    assert schema.FormulationSpec().model_dump() == {k: getattr(Formulation(), k) for k in Formulation.__dataclass_fields__}
+    assert schema.FrictionSpec.model_fields["regularization"].default == DEFAULT_REGULARIZATION
+    curve = SNCurve.eurocode(schema.SNCurveSpec().reference_range)
+    assert schema.SNCurveSpec().model_dump() == {k: float(getattr(curve, k)) for k in schema.SNCurveSpec.model_fields}
+    cutoff = schema.PantographSpec.model_fields["cutoff"].default
+    for function in (catenary.run_pantograph_catenary, catenary.analyse_pantograph_run, catenary.contact_statistics):
+        assert default(function, "cutoff") == cutoff
+    assert default(catenary.run_pantograph_catenary, "solver") == DEFAULT_SOLVER
+    assert default(Model.build, "tolerance") == default(assemble_state, "tolerance")
+    for name in ("xtol", "ftol", "gtol", "learning_rate"):
+        assert default(fitting.fit, name) == default(fitting.fit_batch, name) == getattr(fitting, name.upper())
