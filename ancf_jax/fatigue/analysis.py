@@ -77,7 +77,7 @@ class FatigueSettings:
     scf: float = 1.0
     concentrations: tuple = ()
     layout: str = "barlow"
-    points_per_element: int = 2
+    points_per_element: int = 5
     at: Optional[tuple] = None
     t_start: float = 0.0
     hours_per_run: Optional[float] = None

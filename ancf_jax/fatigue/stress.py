@@ -55,7 +55,7 @@ def fibre_stress(beam: Beam, nodes, element, xi, fibre=None, measure="exact"):
     return n / beam.section.area + jnp.stack([sb, -sb])
 
 
-def points_along(beam: Beam, layout: str = "barlow", points_per_element: int = 2):
+def points_along(beam: Beam, layout: str = "barlow", points_per_element: int = 5):
     """Evaluation points of every active element of a beam.
 
     Args:

@@ -18,7 +18,7 @@ from typing import Annotated, ClassVar, Literal, Optional, Union
 from pydantic import BaseModel, ConfigDict, Field
 
 from ..element.strain_energy import AXIAL_STRAINS, CURVATURES, Formulation
-from ..fatigue.analysis import METHODS as FATIGUE_METHODS
+from ..fatigue.analysis import METHODS as FATIGUE_METHODS, FatigueSettings
 from ..fatigue.sn import CORRECTIONS, EUROCODE
 from ..fatigue.stress import LAYOUTS
 from ..outputs import COMPONENTS, DERIVATIVES
@@ -906,22 +906,22 @@ class FatigueSpec(Table):
     """Fatigue assessment (`ancf-jax fatigue`): surface-fibre stress σ = K_t (N/A ± E c κ)
     along the beams, rainflow or Dirlik damage against an S–N curve, Miner sum, life."""
 
-    method: Literal[FATIGUE_METHODS] = key("rainflow", doc="rainflow (ASTM E1049-85, half cycles 0.5) or "
+    method: Literal[FATIGUE_METHODS] = key(FatigueSettings.method, doc="rainflow (ASTM E1049-85, half cycles 0.5) or "
                                                              "dirlik (spectral; stationary records only)")
     sn_curve: SNCurveSpec = key(SNCurveSpec(), doc="the S–N curve")
-    mean_stress: Literal[CORRECTIONS] = key("none", doc="mean-stress correction (tensile means only)")
+    mean_stress: Literal[CORRECTIONS] = key(FatigueSettings.correction, doc="mean-stress correction (tensile means only)")
     ultimate_strength: Optional[float] = key(None, unit="Pa", gt=0.0, allow_inf_nan=False,
                                              doc="σ_u, needed by goodman and gerber")
-    measure: Literal[CURVATURES] = key("exact", doc="curvature measure of the bending stress")
+    measure: Literal[CURVATURES] = key(FatigueSettings.measure, doc="curvature measure of the bending stress")
     fibre: Optional[float] = key(None, unit="m", gt=0.0, allow_inf_nan=False,
                                  doc="surface fibre distance c (default each section's outer fibre)")
-    scf: float = key(1.0, gt=0.0, allow_inf_nan=False, doc="stress concentration factor K_t everywhere")
+    scf: float = key(FatigueSettings.scf, gt=0.0, allow_inf_nan=False, doc="stress concentration factor K_t everywhere")
     concentrations: dict[str, ConcentrationSpec] = key({}, doc="further K_t on stretches of beams, by name")
-    layout: Literal[LAYOUTS] = key("barlow", doc="points along every beam: the 2 Barlow points of each "
+    layout: Literal[LAYOUTS] = key(FatigueSettings.layout, doc="points along every beam: the 2 Barlow points of each "
                                                  "element, or points_per_element uniform points")
-    points_per_element: int = key(5, ge=2, le=50, doc="points per element of the uniform layout")
+    points_per_element: int = key(FatigueSettings.points_per_element, ge=2, le=50, doc="points per element of the uniform layout")
     points: dict[str, FatiguePointSpec] = key({}, doc="chosen points instead of the layout, by name")
-    t_start: float = key(0.0, unit="s", ge=0.0, allow_inf_nan=False,
+    t_start: float = key(FatigueSettings.t_start, unit="s", ge=0.0, allow_inf_nan=False,
                          doc="ignore output rows before this time (a start-up transient)")
     hours_per_run: Optional[float] = key(None, unit="h", gt=0.0, allow_inf_nan=False,
                                          doc="hours of service one run represents (life in hours)")

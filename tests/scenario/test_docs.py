@@ -96,3 +96,12 @@ def test_defaults_are_written_once():
     assert default(Model.build, "tolerance") == default(assemble_state, "tolerance")
     for name in ("xtol", "ftol", "gtol", "learning_rate"):
         assert default(fitting.fit, name) == default(fitting.fit_batch, name) == getattr(fitting, name.upper())
+    from ancf_jax.fatigue.analysis import FatigueSettings
+    from ancf_jax.fatigue.stress import points_along
+    fatigue = schema.FatigueSpec.model_fields
+    for key, field in (("method", "method"), ("mean_stress", "correction"), ("measure", "measure"),
+                       ("scf", "scf"), ("layout", "layout"), ("points_per_element", "points_per_element"),
+                       ("t_start", "t_start")):
+        assert fatigue[key].default == getattr(FatigueSettings, field), key
+    assert default(points_along, "points_per_element") == FatigueSettings.points_per_element
+    assert default(points_along, "layout") == FatigueSettings.layout
