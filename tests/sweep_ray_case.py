@@ -11,34 +11,54 @@ import psutil
 
 
 def _chunk_workers():
-    """This process's Ray worker processes that are running a chunk now."""
+    """Ray worker processes on this machine that are running a chunk now (a worker
+    titles itself ``ray::run_chunk`` while it runs the task)."""
     out = []
-    for p in psutil.Process(os.getpid()).children(recursive=True):
+    for p in psutil.process_iter(["name", "cmdline"]):
         try:
-            if "run_chunk" in " ".join(p.cmdline()) or "run_chunk" in p.name():
+            if "run_chunk" in (p.info["name"] or "") or "run_chunk" in " ".join(p.info["cmdline"] or ()):
                 out.append(p)
         except psutil.Error:
             pass
     return out
 
 
+def _free_port() -> int:
+    import socket
+    with socket.socket() as s:
+        s.bind(("", 0))
+        return s.getsockname()[1]
+
+
 def sweep_on_ray_killing_a_worker(params, out, kw, root):
-    """A local Ray cluster on 127.0.0.1 with 2 CPUs, no dashboard, no usage statistics;
-    the sweep runs on it while one worker is killed (SIGKILL) mid-chunk. Returns
-    (members seen in chunk order, pids killed)."""
+    """A Ray cluster started as a user starts one, ``ray start --head`` (2 CPUs, no
+    dashboard, no usage statistics) on this machine's own address (a driver given
+    127.0.0.1 is sent there by Ray's address resolution; nothing leaves the machine),
+    and the sweep connected to it by its address (the ``--address`` path of
+    ``ancf-jax sweep``) while one worker is killed (SIGKILL) mid-chunk; ``ray stop``
+    afterwards. Returns (members seen in chunk order, pids killed, the address)."""
+    import shutil
+    import subprocess
+    import sys
     import warnings
-    os.environ["RAY_USAGE_STATS_ENABLED"] = "0"
-    os.environ["PYTHONPATH"] = os.pathsep.join([root] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep)
-                                                         if p])
+    from pathlib import Path
+    # token authentication, as Ray 2.61+ requires of every cluster: the head, its workers
+    # and this driver read the token of ~/.ray/auth_token (generated if missing)
+    env = dict(os.environ, RAY_USAGE_STATS_ENABLED="0", RAY_AUTH_MODE="token",
+               PYTHONPATH=os.pathsep.join([root] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep)
+                                                    if p]))
+    os.environ.update(RAY_USAGE_STATS_ENABLED="0", RAY_AUTH_MODE="token", PYTHONPATH=env["PYTHONPATH"])
     warnings.filterwarnings("ignore", message="os.fork", category=RuntimeWarning)
+    ray_cli = shutil.which("ray") or str(Path(sys.executable).with_name("ray"))
+    from ray._private.services import get_node_ip_address
+    host, port = get_node_ip_address(), _free_port()
+    subprocess.run([ray_cli, "get-auth-token", "--generate"], env=env, check=True, capture_output=True, timeout=60)
+    subprocess.run([ray_cli, "start", "--head", f"--port={port}", f"--node-ip-address={host}", "--num-cpus=2",
+                    "--include-dashboard=false", "--disable-usage-stats"], env=env, check=True,
+                   capture_output=True, timeout=180)
     import ray
 
     from ancf_jax.sweep import run_sweep
-    ray.init(address="local", num_cpus=2, include_dashboard=False, _node_ip_address="127.0.0.1",
-             log_to_driver=False, logging_level="ERROR",
-             runtime_env={"env_vars": {k: os.environ[k] for k in ("JAX_COMPILATION_CACHE_DIR",
-                                                                  "JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS")
-                                       if k in os.environ}})
     seen, killed = [], []
 
     def kill_one(result):
@@ -49,11 +69,13 @@ def sweep_on_ray_killing_a_worker(params, out, kw, root):
                 killed.append(p.pid)
                 break
 
+    address = f"{host}:{port}"
     try:
-        run_sweep("m1", params, out=out, backend="ray", on_chunk=kill_one, **kw)
+        run_sweep("m1", params, out=out, backend="ray", address=address, on_chunk=kill_one, **kw)
     finally:
         ray.shutdown()
-    return seen, killed
+        subprocess.run([ray_cli, "stop", "--force"], env=env, capture_output=True, timeout=180)
+    return seen, killed, address
 
 
 def sweep_sharded_across_two_host_devices(params, out, kw):

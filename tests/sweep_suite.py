@@ -189,9 +189,10 @@ def test_cli_sweep_resumes_the_api_run(tmp_path, capsys):
 @pytest.fixture(scope="module")
 def spawned(tmp_path_factory):
     """One spawned interpreter with two XLA host devices (tests/sweep_ray_case.py): the
-    local backend sharded across both devices, then the sweep on a local Ray cluster
-    (2 CPUs on 127.0.0.1) with one worker killed mid-chunk. Ray never loads into this
-    pytest worker. Returns {case: (store path, what the case returned)}."""
+    local backend sharded across both devices, then the sweep on a Ray cluster started
+    by ``ray start --head`` (2 CPUs on this machine), reached by its address, with one
+    worker killed mid-chunk. Ray never loads into this pytest worker. Returns {case:
+    (store path, what the case returned)}."""
     import importlib.util
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor
@@ -224,11 +225,13 @@ def _case(name, *args):
 
 
 def test_ray_equals_local_with_a_worker_killed(spawned, local_store):
-    """Every member comes back exactly once and equals the local backend."""
+    """On a running cluster reached by its address (``--address``), every member comes
+    back exactly once and equals the local backend."""
     if "ray" not in spawned:
         pytest.skip("ray is not installed (it is in the test extra)")
     _, local, _, _ = local_store
-    out, (seen, killed) = spawned["ray"]
+    out, (seen, killed, address) = spawned["ray"]
+    assert address.rsplit(":", 1)[1].isdigit()
     assert killed, "no chunk was running when the first one finished"
     assert sorted(seen) == list(range(6))  # every member came back exactly once
     ds = xr.open_zarr(out).load()
