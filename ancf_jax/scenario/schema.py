@@ -29,6 +29,7 @@ from ..integrators.explicit import RK4
 from ..models.catenary import CatenaryDesign, PantographDesign, Wire
 from ..newton import ModifiedNewton
 from ..simulation import SOLVERS
+from ..statics import DEFAULTS as STATIC_DEFAULTS
 from .types import Nodes4, Numbers, Points2, Quadrature, Side, TimeFunction, Vec2
 
 #: current version of the file format
@@ -601,11 +602,12 @@ class InitialSpec(Table):
 class StaticsSpec(Table):
     """Static solver settings (initial.mode = static, and `ancf-jax static`)."""
 
-    load_steps: int = key(10, ge=1, le=1000, doc="equal load increments")
+    load_steps: int = key(STATIC_DEFAULTS.load_steps, ge=1, le=1000, doc="equal load increments")
     time: float = key(0.0, unit="s", ge=0.0, allow_inf_nan=False,
                       doc="time at which time functions are evaluated by `ancf-jax static` and "
                           "modal about = equilibrium (the static initial state always uses t = 0)")
-    tolerance: float = key(1e-9, gt=0.0, allow_inf_nan=False, doc="residual tolerance, relative to the largest load")
+    tolerance: float = key(STATIC_DEFAULTS.tolerance, gt=0.0, allow_inf_nan=False,
+                           doc="residual tolerance, relative to the largest load")
 
 
 class ModalSpec(Table):
