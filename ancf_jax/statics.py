@@ -151,14 +151,14 @@ def _solve(system: System, q0, lam0, t, load_factors, root_finder: ModifiedNewto
     inactive = system.inactive_mask()
     border_mass = system.border_mass_diagonal()
     n_border = border_mass.shape[0]
+    m_border = jnp.max(border_mass, initial=0.0)
     if system.chain_size:
         pad = inactive[system.chain_indices()]  # chain order
         beam_mass = system.beam_mass()
-        chain_m = jax.vmap(jnp.diagonal)(beam_mass.diagonal).ravel() * ~pad
-        m_max = jnp.maximum(jnp.max(chain_m), jnp.max(border_mass, initial=0.0))
+        m_chain = jnp.max(jax.vmap(jnp.diagonal)(beam_mass.diagonal).ravel() * ~pad)
+        m_max = jnp.maximum(m_chain, m_border)
     else:
-        m_max = jnp.max(border_mass, initial=0.0)
-    m_max = jnp.maximum(m_max, 1e-300)
+        m_max = m_border
 
     def residual(y, lf):
         q, lam = dae.from_solver_order(system, y)
@@ -171,19 +171,24 @@ def _solve(system: System, q0, lam0, t, load_factors, root_finder: ModifiedNewto
         return jnp.maximum(jnp.max(jnp.abs(r[:n])) / fscale, rc)
 
     def tangent(y, lf):
-        # ε = regularization · max|diag K| / max(m), from the matrix being built (so the
-        # tangent is traced once); the residual, hence the solution, is unchanged
+        # ε M: ε = regularization · max|diag K| / max(m), from the matrix being built (so
+        # the tangent is traced once); the residual, hence the solution, is unchanged.
+        # The chain takes ε from its own stiffness and masses: the bordered solver
+        # factors the chain block alone, whose rigid-body modes (a beam held by joints
+        # only) ε M must lift above round-off however light the beams are beside the
+        # bodies
         q, lam = dae.from_solver_order(system, y)
         a = dae.iteration_matrix(system, q, zero_v, lam, t, 0.0, 0.0,
                                  system.constraint_jacobian(q, t), load_factor=lf)
-        diag = jnp.abs(jnp.diagonal(a.e))[:n_border]
+        k_max = jnp.max(jnp.abs(jnp.diagonal(a.e))[:n_border], initial=0.0)
         if system.chain_size:
-            diag = jnp.concatenate([jnp.abs(jax.vmap(jnp.diagonal)(a.chain.diagonal)).ravel() * ~pad, diag])
-        eps = regularization * jnp.max(diag, initial=0.0) / m_max
-        if system.chain_size:
+            k_chain = jnp.max(jnp.abs(jax.vmap(jnp.diagonal)(a.chain.diagonal)).ravel() * ~pad)
+            k_max = jnp.maximum(k_max, k_chain)
+            eps_chain = regularization * k_chain / jnp.maximum(m_chain, 1e-300)
             # the beam mass has a unit dummy mass on padding nodes: those rows become I
-            a = eqx.tree_at(lambda s: s.chain, a,
-                            (a.chain + beam_mass.scale(eps)).add_diagonal(pad.astype(q.dtype) * (1.0 - eps)))
+            a = eqx.tree_at(lambda s: s.chain, a, (a.chain + beam_mass.scale(eps_chain)).add_diagonal(
+                pad.astype(q.dtype) * (1.0 - eps_chain)))
+        eps = regularization * k_max / jnp.maximum(m_max, 1e-300)
         idx = jnp.arange(n_border)
         return eqx.tree_at(lambda s: s.e, a, a.e.at[idx, idx].add(eps * border_mass))
 
@@ -215,7 +220,7 @@ def solve_static_pure(system: System, state: State, *, load_steps: int = DEFAULT
     load_factors = jnp.arange(1, load_steps + 1, dtype=float) / load_steps
     lam0 = jnp.zeros(system.n_constraints)
     q, lam, its, res, ok = _solve(system, state.q, lam0, jnp.asarray(state.t, float), load_factors,
-                                  root_finder, regularization)
+                                  root_finder, jnp.asarray(regularization, float))
     # full Newton steps may turn a body by whole revolutions: report angles in (−π, π]
     theta = 3 * jnp.arange(system.n_bodies) + 2
     q = q.at[theta].set(jnp.pi - jnp.mod(jnp.pi - q[theta], 2 * jnp.pi))
