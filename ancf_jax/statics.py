@@ -95,10 +95,13 @@ class StaticSolver(eqx.Module):
             entry (forces) and the model size (constraints), is at most this [-].
         max_iterations: Newton iterations per load step (retreats from non-finite
             residuals included).
-        regularization: relative weight ε of the mass-proportional term ε M added to
-            the Newton matrix (not the residual) [-]: coordinates with neither
-            stiffness nor load (e.g. the rotation of a body whose joints all act at
-            its centre) would make it singular.
+        regularization: relative weight r of the mass-proportional term ε M added to
+            the Newton matrix (not the residual) [-], ε = r · (largest stiffness entry)
+            / (largest mass entry), over the beam chain for its block and over the
+            whole matrix for the border: coordinates with neither stiffness nor load
+            (e.g. the rotation of a body whose joints all act at its centre), and the
+            rigid-body modes of beams held by joints only (the bordered solver factors
+            the chain block alone), would make it singular.
         step_tolerance: also converged when the Newton correction is at most this
             fraction of the model size [-]: with quadratic convergence the error is
             then ~1e-20, and the residual is at its round-off floor (which the axial
