@@ -47,6 +47,7 @@ from .newton import ModifiedNewton
 from .section import Section
 from .functions import AbstractPath, Constant, ConstantSpeed
 from .sliding import DEFAULT_REGULARIZATION, SlidingDriveForce, SlidingFriction, SlidingServo
+from .statics import DEFAULTS as STATIC_DEFAULTS
 from .system import State, System
 from .validation import (check_choice, check_finite, check_nonnegative, check_positive,
                          check_vector)
@@ -1487,8 +1488,8 @@ def assemble_state(system: System, state: State, *, tolerance: float = ASSEMBLY_
     return State(jnp.asarray(q), jnp.asarray(v), state.t)
 
 
-def build_in_equilibrium(model: Model, *, load_steps: int = 10, pad_to=None,
-                         tolerance: float = 1e-9, check_stability: bool = True,
+def build_in_equilibrium(model: Model, *, load_steps: int = STATIC_DEFAULTS.load_steps, pad_to=None,
+                         tolerance: float = STATIC_DEFAULTS.tolerance, check_stability: bool = True,
                          hold: bool | None = False, root_finder: ModifiedNewton | None = None):
     """Static equilibrium with every sliding joint held, then released.
 
@@ -1508,9 +1509,13 @@ def build_in_equilibrium(model: Model, *, load_steps: int = 10, pad_to=None,
     Args:
         hold: holds of the returned system: False releases every sliding joint, None
             keeps those added with ``hold=True``.
-        root_finder: the static solve's root finder (:func:`~ancf_jax.statics.solve_static`;
-            None: dense Newton; ``statics.STATIC_NEWTON``: structured, for thousands of
-            elements, where ``check_stability``'s dense modal analysis is too costly too).
+        load_steps: load increments of the static solve
+            (:func:`~ancf_jax.statics.solve_static`; defaults
+            :class:`~ancf_jax.statics.StaticSolver`).
+        tolerance: its residual tolerance.
+        root_finder: its root finder (default: full Newton on the structured Newton
+            matrix, linear in the element count; for thousands of elements
+            ``check_stability``'s dense modal analysis is the costly part).
 
     Returns:
         (released system, initial State, StaticSolution of the held system).

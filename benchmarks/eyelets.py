@@ -118,7 +118,7 @@ def eyelet_initial(n: int, **kw):
 
     m, _ = eyelet_model(n, **kw)
     system, state, _ = build_in_equilibrium(m, check_stability=False)
-    released = solve_static(system, state)
+    released = solve_static(system, state, load_steps=1)  # from the held equilibrium: the full load at once
     return system, State(released.state.q, state.v, state.t)
 
 

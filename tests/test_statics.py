@@ -1,17 +1,26 @@
 """Statics against closed-form answers: the large-deflection elastica (Bisshopp &
-Drucker 1945) and the elastic catenary (Irvine 1981)."""
+Drucker 1945) and the elastic catenary (Irvine 1981); the default root finder (full
+Newton on the structured Newton matrix) against the same iteration with dense LU
+solves; the regularization of unloaded, unconstrained coordinates."""
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
-from ancf_jax import StaticsError, mesh
+from ancf_jax import StaticsError, dae, mesh
 from ancf_jax.element import Formulation
-from ancf_jax.model import Model, node
+from ancf_jax.linalg import AutoSaddleSolver, BorderedChainSolver, DenseLUSolver
+from ancf_jax.model import Model, body_point, node
+from ancf_jax.models.m2 import m2_model
 from ancf_jax.section import Section
-from ancf_jax.statics import solve_static
+from ancf_jax.statics import DEFAULTS, StaticSolver, solve_static
+
+#: the dense-LU root finder: the default's Newton iteration, each Newton system solved by
+#: a dense LU of the whole matrix instead of the bordered block-tridiagonal solver
+DENSE = StaticSolver(linear_solver=DenseLUSolver()).root_finder()
 
 LOADS = [0.5, 1.0, 2.0, 5.0, 10.0]  # PL²/EI
 
@@ -46,14 +55,17 @@ def cantilever(n, formulation=None):
     return m.build()
 
 
-def solve_tip(system, state, k):
-    """Tip displacement for PL²/EI = k; the load is array data, so one compile serves all k."""
+def solve_loaded(system, state, k, root_finder=None):
+    """Static solution for PL²/EI = k; the load is array data, so one compile serves all k."""
     import equinox as eqx
-    f = system.forces[0]
     sys_k = eqx.tree_at(lambda s: s.forces[0].force, system, jnp.array([0.0, -k]))
-    sol = solve_static(sys_k, state, load_steps=5)  # same shapes for every k: one compile
-    tip = np.asarray(sys_k.beam_nodes(sol.state.q, 0)[-1, :2])
-    return tip
+    return sys_k, solve_static(sys_k, state, load_steps=5, root_finder=root_finder)
+
+
+def solve_tip(system, state, k):
+    """Tip position (x, y) [m] for PL²/EI = k."""
+    sys_k, sol = solve_loaded(system, state, k)
+    return np.asarray(sys_k.beam_nodes(sol.state.q, 0)[-1, :2])
 
 
 @pytest.fixture(scope="module")
@@ -85,6 +97,59 @@ def test_elastica_convergence_rate(elastica_results):
         errs = [np.linalg.norm(out[n][k] - refs[k]) for n in (2, 4, 8, 16)]
         rates = np.log2(np.array(errs[:-1]) / np.array(errs[1:]))
         assert rates[-1] > 3.5, f"PL²/EI={k}: errors {errs}, rates {rates}"
+
+
+def assert_same_equilibrium(a, b, what):
+    """Two static solutions agree to round-off: q to 1e-12 m (or 1e-12 for slopes), the
+    multipliers to 1e-12 of the largest."""
+    dq = float(np.max(np.abs(np.asarray(a.state.q) - np.asarray(b.state.q))))
+    lam_a, lam_b = np.asarray(a.multipliers), np.asarray(b.multipliers)
+    dlam = float(np.max(np.abs(lam_a - lam_b))) / max(float(np.max(np.abs(lam_a))), 1e-300)
+    assert dq < 1e-12 and dlam < 1e-12, f"{what}: |dq| {dq:.2e}, |dlam|/max|lam| {dlam:.2e}"
+    assert np.asarray(a.converged).all() and np.asarray(b.converged).all()
+
+
+def test_structured_default_is_the_dense_newton_on_a_cantilever():
+    """The default root finder (full Newton on the structured Newton matrix, bordered
+    block-tridiagonal solves) and the same iteration with dense LU solves reach the same
+    large-deflection equilibrium (16 elements, PL²/EI = 10) to round-off."""
+    assert isinstance(DEFAULTS.linear_solver, AutoSaddleSolver) and DEFAULTS.root_finder().contraction == 0.0
+    system, state = cantilever(16)
+    _, structured = solve_loaded(system, state, 10.0)  # the elastica fixture's program
+    _, dense = solve_loaded(system, state, 10.0, DENSE)
+    assert_same_equilibrium(structured, dense, "cantilever")
+
+
+def test_structured_default_is_the_dense_newton_on_m2_held():
+    """M2 with the trolley held (cable, trolley, cabin; the Newton matrix bordered by
+    the bodies, the sliding coordinate and the multipliers): the default and the dense-LU
+    root finder reach the same equilibrium to round-off."""
+    system, state = m2_model(hold=True).build()
+    structured = solve_static(system, state)
+    dense = solve_static(system, state, root_finder=DENSE)
+    assert_same_equilibrium(structured, dense, "M2 held")
+
+
+def test_regularization_keeps_a_free_rotation_solvable():
+    """A wheel hinged at its centre to a cantilever tip: its rotation has neither
+    stiffness nor load, so the Newton matrix is singular without the mass-proportional
+    regularization; with it the solution is the linear tip deflection under the wheel's
+    weight, δ = m g L³ / (3 EI) (δ/L ~ 7e-5: the nonlinearity is below 1e-8 relative).
+    The beam is 1e8 times lighter than the wheel: the regularization of the beam chain,
+    which the bordered solver factors alone (its rigid-body modes held by the clamp's
+    multipliers only), must not vanish beside the wheel's mass."""
+    L, ei, mass, g = 1.0, 5e3, 0.1, 9.81
+    m = Model(gravity=(0.0, -g))
+    m.add_beam("beam", mesh.straight((0, 0), (1, 0), L, 4), Section(2e9, 1e-3, ei / 2e9, 1e-9))
+    m.clamp("root", "beam", 0)
+    m.add_body("wheel", mass=mass, inertia=1e-3, position=(L, 0.0))
+    m.revolute("hinge", node("beam", -1), body_point("wheel"))
+    system, state = m.build()
+    sol = solve_static(system, state, load_steps=1)
+    tip = np.asarray(system.beam_nodes(sol.state.q, 0))[-1]
+    assert -tip[1] == pytest.approx(mass * g * L**3 / (3 * ei), rel=1e-6)
+    with pytest.raises(StaticsError):
+        solve_static(system, state, load_steps=1, regularization=0.0)
 
 
 # ---------------------------------------------------------------------------- catenary
@@ -177,7 +242,13 @@ def test_cantilever_on_a_user_spring_is_euler_bernoulli():
     spring = CubicSpring("spring", BeamPoint(0, jnp.asarray(L)), GroundPoint(jnp.array([L, -0.5])),
                          k, 0.0, 0.5)
     system = eqx.tree_at(lambda s: s.forces, system, tuple(system.forces) + (spring,))
-    sol = solve_static(system, state, tolerance=1e-12)
+    # the default root finder factors the bordered matrix (the spring an auxiliary
+    # unknown of the border), not a dense one
+    lam = jnp.zeros(system.n_constraints)
+    shape = jax.eval_shape(lambda q: dae.iteration_matrix(system, q, q, lam, state.t, 0.0, 0.0,
+                                                          system.constraint_jacobian(q, state.t)), state.q)
+    assert shape.n_aux > 0 and isinstance(DEFAULTS.linear_solver.select(shape), BorderedChainSolver)
+    sol = solve_static(system, state, load_steps=1, tolerance=1e-12)
     tip = np.asarray(system.beam_nodes(sol.state.q, 0))[-1]
     delta = p / (3 * ei / L**3 + k)
     assert -tip[1] == pytest.approx(delta, rel=1e-6)

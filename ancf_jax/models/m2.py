@@ -18,6 +18,7 @@ from ..errors import ModelError
 from ..model import Model, body_point, build_in_equilibrium, node
 from ..outputs import Output
 from ..section import Section
+from ..statics import DEFAULTS as STATIC_DEFAULTS
 
 #: parameters of M2 (SI), as in docs/models.md; I as printed in Table 2; ``height`` lifts
 #: support B to (span, height) (0 in M2)
@@ -81,8 +82,9 @@ def m2_model(n_elements: int | None = None, *, formulation: Formulation | None =
     return m
 
 
-def m2_initial(n_elements: int | None = None, *, pad_to: int | None = None, load_steps: int = 10,
-               **overrides):
-    """(released system, equilibrium state, static solution) of M2 (see module doc)."""
+def m2_initial(n_elements: int | None = None, *, pad_to: int | None = None,
+               load_steps: int = STATIC_DEFAULTS.load_steps, **overrides):
+    """(released system, equilibrium state, static solution) of M2 (see module doc);
+    ``load_steps`` of the held static solve (default :class:`~ancf_jax.statics.StaticSolver`)."""
     return build_in_equilibrium(m2_model(n_elements, **overrides), load_steps=load_steps,
                                 pad_to=pad_to)

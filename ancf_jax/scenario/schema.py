@@ -30,6 +30,7 @@ from ..models.catenary import CUTOFF, CatenaryDesign, PantographDesign, Wire
 from ..newton import ModifiedNewton
 from ..simulation import DEFAULT_SOLVER, SOLVERS
 from ..sliding import DEFAULT_REGULARIZATION
+from ..statics import DEFAULTS as STATIC_DEFAULTS
 from .types import Nodes4, Numbers, Points2, Quadrature, Side, TimeFunction, Vec2
 
 #: current version of the file format
@@ -600,13 +601,18 @@ class InitialSpec(Table):
 
 
 class StaticsSpec(Table):
-    """Static solver settings (initial.mode = static, and `ancf-jax static`)."""
+    """Static solver settings (initial.mode = static, and `ancf-jax static`): full Newton
+    on the structured Newton matrix with load stepping, defaults those of
+    `ancf_jax.statics.StaticSolver`."""
 
-    load_steps: int = key(10, ge=1, le=1000, doc="equal load increments")
+    load_steps: int = key(STATIC_DEFAULTS.load_steps, ge=1, le=1000, doc="equal load increments")
     time: float = key(0.0, unit="s", ge=0.0, allow_inf_nan=False,
                       doc="time at which time functions are evaluated by `ancf-jax static` and "
                           "modal about = equilibrium (the static initial state always uses t = 0)")
-    tolerance: float = key(1e-9, gt=0.0, allow_inf_nan=False, doc="residual tolerance, relative to the largest load")
+    tolerance: float = key(STATIC_DEFAULTS.tolerance, gt=0.0, allow_inf_nan=False,
+                           doc="residual tolerance, relative to the largest load (also converged when "
+                               f"the Newton correction is below {STATIC_DEFAULTS.step_tolerance:g} of the "
+                               "model size)")
 
 
 class ModalSpec(Table):

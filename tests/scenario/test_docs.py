@@ -13,6 +13,7 @@ from ancf_jax.errors import ModelError
 from ancf_jax.linalg import AutoSaddleSolver, BorderedChainSolver, DenseLUSolver
 from ancf_jax.newton import ModifiedNewton
 from ancf_jax.simulation import ROOT_FINDER_OPTIONS, make_solver
+from ancf_jax.statics import StaticSolver
 
 PAGE = Path(__file__).resolve().parents[2] / "docs" / "scenario-format.md"
 
@@ -105,3 +106,21 @@ def test_defaults_are_written_once():
         assert fatigue[key].default == getattr(FatigueSettings, field), key
     assert default(points_along, "points_per_element") == FatigueSettings.points_per_element
     assert default(points_along, "layout") == FatigueSettings.layout
+
+
+def test_statics_defaults_are_the_static_solvers():
+    """The [statics] table's defaults are read from statics.StaticSolver (written once),
+    as are build_in_equilibrium's, solve_static's and M2's."""
+    import inspect
+
+    from ancf_jax.model import build_in_equilibrium
+    from ancf_jax.models.m2 import m2_initial
+    from ancf_jax.statics import solve_static, solve_static_pure
+
+    fields = {f.name: f.default for f in StaticSolver.__dataclass_fields__.values()}
+    spec = schema.StaticsSpec()
+    assert (spec.load_steps, spec.tolerance) == (fields["load_steps"], fields["tolerance"])
+    for fn in (solve_static, solve_static_pure, build_in_equilibrium, m2_initial):
+        for name, p in inspect.signature(fn).parameters.items():
+            if name in fields and name != "linear_solver":
+                assert p.default == fields[name], (fn.__name__, name)
