@@ -19,6 +19,7 @@ Exit status:
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import os
@@ -338,6 +339,12 @@ def _check_out(path, option: str = "--out", *, file: bool = False) -> Path:
     return path
 
 
+def _limits(args):
+    """The :class:`~ancf_jax.integrate.RunLimits` of ``--max-steps``."""
+    from .integrate import RunLimits
+    return RunLimits() if args.max_steps is None else RunLimits(max_steps=args.max_steps)
+
+
 def _check_size(args, scs, settings):
     """Refuse a runaway run (steps, output size) before anything is built or compiled;
     the state size is counted from the scenario (4 per node, 3 per body, point mass of
@@ -356,7 +363,7 @@ def _check_size(args, scs, settings):
         try:
             check_run_size(settings.t_end, settings.dt, settings.output_dt, n, batch=len(scs),
                            fixed_step=settings.solver in FIXED_STEP_SOLVERS,
-                           max_steps=args.max_steps, names=names)
+                           limits=_limits(args), names=names)
         except ModelError as e:
             raise _UsageError(str(e)) from None
 
@@ -510,8 +517,9 @@ def _run(args) -> int:
     if args.rho_inf is not None and settings.solver != "generalized-alpha":
         raise _UsageError("argument --rho-inf: needs --solver generalized-alpha")
     kw = settings.simulate_kwargs()
-    kw["locate_crossings"] = kw["locate_crossings"] or args.locate_crossings
-    kw.update(progress=False if args.no_progress else None, on_failure="return", max_steps=args.max_steps)
+    if args.locate_crossings:
+        kw["options"] = dataclasses.replace(kw["options"], locate_crossings=True)
+    kw.update(progress=False if args.no_progress else None, on_failure="return", limits=_limits(args))
     out = _check_out(Path(args.out) if args.out is not None else Path("results") / base.name)
     _check_size(args, scs, settings)
     runs = _continue(args, scs, kw) if args.continue_from is not None else _simulate_all(scs, settings, kw)
@@ -582,7 +590,7 @@ def _fatigue(args) -> int:
     if args.study:
         return _fatigue_study(args, base, sc, settings)
     kw = sc.solver.simulate_kwargs()
-    kw.update(progress=False if args.no_progress else None, on_failure="return", max_steps=args.max_steps)
+    kw.update(progress=False if args.no_progress else None, on_failure="return", limits=_limits(args))
     out = _check_out(Path(args.out) if args.out is not None else Path("results") / f"{base.name}-fatigue")
     _check_size(args, scs, sc.solver)
     r = next(iter(_simulate_all(scs, sc.solver, kw).values()))
@@ -615,8 +623,7 @@ def _fatigue_study(args, base, sc, settings) -> int:
     from .errors import ModelError
     from .fatigue import study
     from .identification.parameters import resolve
-    from .integrate import RunOptions
-    from .simulation import make_solver
+    from .integrate import NO_RETRIES
     names, columns = [], []
     for item in args.study:
         name, eq, text = item.partition("=")
@@ -636,9 +643,9 @@ def _fatigue_study(args, base, sc, settings) -> int:
     system, state = sc.build()
     try:
         resolve(system, names)
-        solver = make_solver(sc.solver.solver, **dict(sc.solver.solver_options))
-        options = RunOptions(drift_tolerance=sc.solver.drift_tolerance,
-                             locate_crossings=sc.solver.locate_crossings)
+        run = sc.solver.simulate_kwargs()  # the study runs without step retries
+        solver, options = run["solver"], dataclasses.replace(run["options"],
+                                                             max_halvings=NO_RETRIES.max_halvings)
     except ModelError as e:
         raise _UsageError(f"--study: {e}") from None
     res = study(system, state, names, np.array(columns).T, settings, t_end=sc.solver.t_end,

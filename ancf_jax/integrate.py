@@ -42,22 +42,30 @@ import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
+from .errors import ModelError
 from .failures import Failure
 from .forces import has_kinks, kink_values
 from .integrators.base import AbstractIntegrator, Carry, StepInfo
 from ._control import run_if
 from .joints import SlidingJoint
 from .system import State, System
+from .validation import check_count, check_positive
 
 
 #: default fixed step [s] of a run (simulate, the scenario format, the CLI): M1 and M2
 #: at their validated settings (docs/theory.md, "Defaults from measurements")
 DEFAULT_DT = 1e-3
 
-#: default number of step halvings of :func:`ancf_jax.simulation.simulate` (its pure
-#: core :func:`~ancf_jax.simulation.trajectory` runs without retries, RunOptions' 0)
+#: default number of step halvings of a run (:class:`RunOptions`; the pure core
+#: :func:`~ancf_jax.simulation.trajectory` runs without retries, :data:`NO_RETRIES`)
 DEFAULT_HALVINGS = 6
+
+#: most time steps a run takes unless asked for more (:class:`RunLimits`, ``--max-steps``)
+MAX_STEPS = 50_000_000
+#: most output a run keeps in memory unless asked for more (:class:`RunLimits`) [bytes]
+MAX_OUTPUT_BYTES = 4 * 2**30
 
 #: a located kink of a force law ends the first substep this fraction of the step's
 #: change of the kink value before the kink. A damped one-sided member's force jumps by
@@ -71,29 +79,76 @@ KINK_MARGIN = 1e-2
 
 
 class RunOptions(eqx.Module):
-    """Static options of a run (their defaults are the defaults of simulate, the
-    scenario format and the CLI).
+    """Options of the time loop (static: they shape the compiled program). Their
+    defaults are the defaults of :func:`~ancf_jax.simulation.simulate`, the scenario
+    format and the CLI.
 
     Attributes:
-        drift_tolerance: largest accepted constraint violation max|Φ| [m] (and rad).
+        drift_tolerance: largest accepted constraint violation max|Φ| [m] (and rad), > 0.
         locate_crossings: split steps at node crossings of sliding joints, at
             slack/taut transitions of one-sided spring-dampers and contacts, and at
             reversals of sliding friction.
-        crossing_iterations: regula-falsi iterations to locate a crossing.
+        crossing_iterations: regula-falsi iterations to locate a crossing (1..50).
         max_halvings: when a step fails (Newton not converged, non-finite state,
             sliding jump), redo it in substeps, halving down to h / 2^max_halvings and
-            growing back after successes (0: no retries; a ``while_loop``, so
-            reverse-mode differentiation needs 0).
+            growing back after successes (0..30; 0: no retries; a ``while_loop``, so
+            reverse-mode differentiation needs 0: :data:`NO_RETRIES`).
         max_sliding_step: largest move of a sliding coordinate in one step, as a
-            fraction of the length of the element it starts in; a larger move is taken
-            for a spurious Newton solution (SLIDING_JUMP), retried like a failed step.
+            fraction of the length of the element it starts in (> 0); a larger move is
+            taken for a spurious Newton solution (SLIDING_JUMP), retried like a failed
+            step.
+
+    Raises:
+        ModelError: a value out of its range (on construction).
     """
 
     drift_tolerance: float = eqx.field(static=True, default=1e-6)
     max_sliding_step: float = eqx.field(static=True, default=0.5)
     locate_crossings: bool = eqx.field(static=True, default=False)
     crossing_iterations: int = eqx.field(static=True, default=6)
-    max_halvings: int = eqx.field(static=True, default=0)
+    max_halvings: int = eqx.field(static=True, default=DEFAULT_HALVINGS)
+
+    def __check_init__(self):
+        check_positive("drift_tolerance", self.drift_tolerance, "m")
+        check_positive("max_sliding_step", self.max_sliding_step, "element lengths")
+        if not isinstance(self.locate_crossings, (bool, np.bool_)):
+            raise ModelError(f"locate_crossings must be true or false, got {self.locate_crossings!r}")
+        check_count("crossing_iterations", self.crossing_iterations, 1, 50)
+        check_count("max_halvings", self.max_halvings, 0, 30)
+
+
+#: options of the pure, differentiable core (:func:`~ancf_jax.simulation.trajectory`,
+#: :func:`integrate_fixed`): no retries in substeps (a ``while_loop``, which
+#: reverse-mode autodiff cannot pass); the other options as :class:`RunOptions`
+NO_RETRIES = RunOptions(max_halvings=0)
+
+
+class RunLimits(eqx.Module):
+    """Host-side limits of a run: checked before anything is compiled, and the size of
+    the compiled calls the host loop makes.
+
+    Attributes:
+        max_steps: most time steps accepted (integer >= 1): a longer run is refused
+            before anything is compiled (:func:`~ancf_jax.simulation.check_run_size`).
+        max_output_bytes: most output kept in memory [bytes] (> 0).
+        chunks: number of compiled calls the run is split into (integer >= 1; progress,
+            Ctrl-C and early stop act between them). None: calls of about
+            :data:`~ancf_jax.simulation.STEPS_PER_CHUNK` steps, so that runs of any
+            length share one compiled program.
+
+    Raises:
+        ModelError: a value out of its range (on construction).
+    """
+
+    max_steps: int = MAX_STEPS
+    max_output_bytes: float = MAX_OUTPUT_BYTES
+    chunks: int | None = None
+
+    def __check_init__(self):
+        check_count("max_steps", self.max_steps, 1)
+        check_positive("max_output_bytes", self.max_output_bytes, "bytes")
+        if self.chunks is not None:
+            check_count("chunks", self.chunks, 1)
 
 
 class Segment(eqx.Module):
@@ -347,7 +402,7 @@ def _step_with_retries(system, integrator, carry, h, context, options):
 
 
 def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopState, context,
-                    h, *, n_intervals: int, substeps: int, options: RunOptions = RunOptions(),
+                    h, *, n_intervals: int, substeps: int, options: RunOptions = NO_RETRIES,
                     t_stop=jnp.inf):
     """Advance ``loop`` by ``n_intervals`` × ``substeps`` steps of size h.
 

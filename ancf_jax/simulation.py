@@ -39,8 +39,9 @@ import numpy as np
 
 from . import _memory
 from .errors import ModelError, SimulationError, SimulationInterrupted
-from .integrate import (DEFAULT_DT, DEFAULT_HALVINGS, Checkpoint, LoopState, RunOptions, adaptive_failure,
-                        initial_loop, integrate_fixed, segment_of, sliding_beams)
+from .integrate import (DEFAULT_DT, MAX_OUTPUT_BYTES, MAX_STEPS, NO_RETRIES, Checkpoint,  # noqa: F401
+                        LoopState, RunLimits, RunOptions, adaptive_failure, initial_loop, integrate_fixed,
+                        segment_of, sliding_beams)
 from .failures import Failure
 from .integrators.base import AbstractAdaptiveSolver, AbstractIntegrator, AbstractSolver, Carry
 from .integrators.diffrax_solvers import KINDS as DIFFRAX_KINDS
@@ -103,12 +104,8 @@ def solver_name(solver: AbstractSolver) -> str:
     return solver.name
 
 
+#: steps of one compiled call of the host loop unless :class:`RunLimits` ``chunks`` says
 STEPS_PER_CHUNK = 500
-
-#: most time steps a run takes unless asked for more (``max_steps=``, ``--max-steps``)
-MAX_STEPS = 50_000_000
-#: most output a run keeps in memory unless asked for more (``max_output_bytes=``) [bytes]
-MAX_OUTPUT_BYTES = 4 * 2**30
 
 
 def run_size(n_intervals: int, substeps: int, n_coordinates: int, n_multipliers: int = 0,
@@ -123,8 +120,7 @@ def run_size(n_intervals: int, substeps: int, n_coordinates: int, n_multipliers:
 
 def check_run_size(t_end: float, dt: float, output_dt: float | None, n_coordinates: int,
                    n_multipliers: int = 0, *, batch: int = 1, fixed_step: bool = True,
-                   max_steps: int | None = None, max_output_bytes: int | None = None,
-                   names: dict | None = None) -> tuple[int, int]:
+                   limits: RunLimits = RunLimits(), names: dict | None = None) -> tuple[int, int]:
     """Refuse a runaway run before anything is compiled.
 
     Args:
@@ -136,8 +132,9 @@ def check_run_size(t_end: float, dt: float, output_dt: float | None, n_coordinat
         batch: number of batch members (output of each is kept).
         fixed_step: count steps (adaptive solvers choose theirs: only the output is
             checked).
-        max_steps: most steps accepted (default :data:`MAX_STEPS`).
-        max_output_bytes: most output accepted [bytes] (default :data:`MAX_OUTPUT_BYTES`).
+        limits: the most steps and output accepted (:class:`~ancf_jax.integrate.RunLimits`,
+            default :data:`~ancf_jax.integrate.MAX_STEPS` and
+            :data:`~ancf_jax.integrate.MAX_OUTPUT_BYTES`).
         names: how the message names ``t_end``, ``dt``, ``output_dt``, ``max_steps`` and
             ``max_output_bytes`` (the command line names its options; an empty name: no
             such knob to mention).
@@ -148,13 +145,11 @@ def check_run_size(t_end: float, dt: float, output_dt: float | None, n_coordinat
     Raises:
         ModelError: one line with the estimate and the knob that allows the run.
     """
-    nm = {**dict(t_end="t_end", dt="dt", output_dt="output_dt", max_steps="max_steps",
-                 max_output_bytes="max_output_bytes"), **(names or {})}
-    max_steps = MAX_STEPS if max_steps is None else max_steps
-    max_output_bytes = MAX_OUTPUT_BYTES if max_output_bytes is None else max_output_bytes
-    if isinstance(max_steps, bool) or not isinstance(max_steps, (int, np.integer)) or max_steps < 1:
-        raise ModelError(f"{nm['max_steps']} must be an integer >= 1, got {max_steps!r}")
-    check_positive(nm["max_output_bytes"], max_output_bytes, "bytes")
+    nm = {**dict(t_end="t_end", dt="dt", output_dt="output_dt", max_steps="RunLimits.max_steps",
+                 max_output_bytes="RunLimits.max_output_bytes"), **(names or {})}
+    if not isinstance(limits, RunLimits):
+        raise ModelError(f"limits must be a RunLimits, got {type(limits).__name__}")
+    max_steps, max_output_bytes = limits.max_steps, limits.max_output_bytes
     n_int, sub, _, out_dt = time_grid(t_end, dt, output_dt)
     steps, size = run_size(n_int, sub, n_coordinates, n_multipliers, batch)
     if fixed_step and steps > max_steps:
@@ -188,30 +183,22 @@ def _chunking(n_intervals: int, substeps: int, chunks: int | None,
     return per, int(math.ceil(n_intervals / per))
 
 
-def _prepare(t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings,
-             on_failure, chunks, solver_options, batched=False):
+def _prepare(t_end, dt, solver, output_dt, options, limits, on_failure, batched=False):
     """Check the run arguments (before anything is compiled) and derive the solver
-    instance, RunOptions, time grid and chunking."""
+    instance, time grid and chunking."""
     if on_failure not in ("raise", "return"):
         raise ModelError(f"on_failure must be 'raise' or 'return', got {on_failure!r}")
-    check_positive("drift_tolerance", drift_tolerance, "m")
+    if not isinstance(options, RunOptions):
+        raise ModelError(f"options must be a RunOptions, got {type(options).__name__}")
+    if not isinstance(limits, RunLimits):
+        raise ModelError(f"limits must be a RunLimits, got {type(limits).__name__}")
     grid = time_grid(t_end, dt, output_dt)
     if isinstance(solver, str):
-        solver = make_solver(solver, **(solver_options or {}))
-    elif solver_options:
-        raise ModelError("solver_options apply to solvers given by name")
+        solver = make_solver(solver)
     elif not isinstance(solver, AbstractSolver):
         raise ModelError(f"solver must be one of {', '.join(SOLVERS)} or an AbstractSolver "
-                         f"instance, got {type(solver).__name__}")
-    options = RunOptions(drift_tolerance=drift_tolerance, locate_crossings=locate_crossings,
-                         max_halvings=_halvings(max_halvings))
-    return solver, options, grid, _chunking(grid[0], grid[1], chunks, batched)
-
-
-def _halvings(value) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not 0 <= value <= 30:
-        raise ModelError(f"max_halvings must be an integer in 0..30, got {value!r}")
-    return int(value)
+                         f"instance (make_solver(name, **options) for options), got {type(solver).__name__}")
+    return solver, grid, _chunking(grid[0], grid[1], limits.chunks, batched)
 
 
 def time_grid(t_end: float, dt: float, output_dt: float | None):
@@ -231,7 +218,7 @@ def time_grid(t_end: float, dt: float, output_dt: float | None):
 
 # ---------------------------------------------------------------------------- pure core
 def trajectory(system: System, state: State, solver, *, t_end: float, dt: float,
-               output_dt: float | None = None, options: RunOptions = RunOptions()):
+               output_dt: float | None = None, options: RunOptions = NO_RETRIES):
     """Pure, jittable/vmappable/differentiable run: returns a
     :class:`~ancf_jax.integrate.Segment` with the initial state and one row per
     output time, plus the final :class:`~ancf_jax.integrate.LoopState` (status).
@@ -239,8 +226,8 @@ def trajectory(system: System, state: State, solver, *, t_end: float, dt: float,
     ``t_end``, ``dt`` and ``output_dt`` are Python floats (they fix array shapes).
     Fixed-step solvers only.
 
-    There are no retries in substeps here (they are a while loop, which reverse-mode
-    autodiff cannot pass): when a step fails (Newton not converged, NaN, drift), the
+    By default there are no retries in substeps (:data:`~ancf_jax.integrate.NO_RETRIES`:
+    they are a while loop, which reverse-mode autodiff cannot pass): when a step fails (Newton not converged, NaN, drift), the
     state is frozen from then on and ``loop.status`` holds the failure code
     (:class:`~ancf_jax.failures.Failure`). Check ``loop.status == 0`` before
     using a value or gradient; a frozen run's gradient is meaningless. Reduce ``dt``
@@ -295,36 +282,25 @@ def _progress(total: int, enabled: bool | None, desc: str):
 
 def simulate(system: System, state: State, *, t_end: float, dt: float | None = None,
              solver: Any = DEFAULT_SOLVER, output_dt: float | None = None,
-             drift_tolerance: float = RunOptions.drift_tolerance,
-             locate_crossings: bool = RunOptions.locate_crossings,
-             max_halvings: int = DEFAULT_HALVINGS, on_failure: str = "raise", progress: bool | None = None,
-             chunks: int | None = None, solver_options: dict | None = None, max_steps: int | None = None,
-             max_output_bytes: int | None = None) -> Results:
+             options: RunOptions = RunOptions(), limits: RunLimits = RunLimits(),
+             on_failure: str = "raise", progress: bool | None = None) -> Results:
     """Simulate ``system`` from ``state`` until ``t_end``.
 
     Args:
         t_end: end time [s] (> 0; the run starts at ``state.t``).
         dt: step [s] of fixed-step solvers, initial step of adaptive ones
             (default :data:`~ancf_jax.integrate.DEFAULT_DT`, 1 ms).
-        solver: a name (see module docstring) or a solver instance.
+        solver: a name (see module docstring; its default settings) or a solver
+            instance (:func:`make_solver` builds one from a name and flat options, as
+            the scenario format gives them).
         output_dt: output interval [s] (default: every step).
-        drift_tolerance: stop when max|Φ| exceeds this [m].
-        locate_crossings: split fixed steps at node crossings of sliding joints, at
-            the kinks of one-sided spring-dampers and contacts (slack/taut, damper
-            force limit) and at reversals of sliding friction.
-        max_halvings: a failed fixed step (Newton not converged, NaN) is redone in
-            substeps down to dt / 2^max_halvings before the run is declared failed.
+        options: options of the time loop (:class:`~ancf_jax.integrate.RunOptions`):
+            drift tolerance, location of node crossings and kinks, step retries.
+        limits: most steps and output accepted before anything is compiled, and the
+            size of the compiled calls (:class:`~ancf_jax.integrate.RunLimits`).
         on_failure: ``"raise"`` (a :class:`SimulationError` carrying the results up to
             the failure) or ``"return"`` (results with ``status`` set).
         progress: show a progress bar (None: only when the run takes over a second).
-        chunks: number of chunks the run is split into (progress and early-stop
-            granularity; default: chunks of about 500 steps, one compiled program for
-            runs of any length).
-        solver_options: options for a solver given by name.
-        max_steps: most time steps accepted (default :data:`MAX_STEPS`, 5e7): a longer
-            run is refused before anything is compiled (:func:`check_run_size`).
-        max_output_bytes: most output kept in memory [bytes] (default
-            :data:`MAX_OUTPUT_BYTES`, 4 GiB).
 
     A ``KeyboardInterrupt`` (Ctrl-C) during the run stops it at the next chunk
     boundary: the results up to then get ``status = "interrupted"`` and are returned
@@ -332,20 +308,18 @@ def simulate(system: System, state: State, *, t_end: float, dt: float | None = N
     :class:`~ancf_jax.errors.SimulationInterrupted` (a ``KeyboardInterrupt``).
 
     Raises:
-        ModelError: bad arguments, or a run above ``max_steps`` or ``max_output_bytes``
-            (before anything is compiled).
+        ModelError: bad arguments, or a run above ``limits`` (before anything is
+            compiled).
         SimulationError: the run failed (NaN, Newton failure, constraint drift, a
             sliding joint leaving its beam); ``err.results`` holds the results so far.
         SimulationInterrupted: Ctrl-C with ``on_failure="raise"``; ``err.results``
             holds the results so far.
     """
     dt = DEFAULT_DT if dt is None else dt
-    solver, options, (n_int, sub, h, out_dt), (per_chunk, n_chunks) = _prepare(
-        t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings, on_failure,
-        chunks, solver_options)
+    solver, (n_int, sub, h, out_dt), (per_chunk, n_chunks) = _prepare(
+        t_end, dt, solver, output_dt, options, limits, on_failure)
     check_run_size(t_end, dt, output_dt, int(np.size(state.q)), int(system.n_constraints),
-                   fixed_step=not isinstance(solver, AbstractAdaptiveSolver), max_steps=max_steps,
-                   max_output_bytes=max_output_bytes)
+                   fixed_step=not isinstance(solver, AbstractAdaptiveSolver), limits=limits)
     t0 = float(state.t)
     if isinstance(state, Checkpoint) and (isinstance(solver, AbstractAdaptiveSolver)
                                           or solver_name(solver) != state.solver):
@@ -526,12 +500,8 @@ def unstack(tree, index):
 
 def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
                    solver: Any = DEFAULT_SOLVER, output_dt: float | None = None,
-                   drift_tolerance: float = RunOptions.drift_tolerance,
-                   locate_crossings: bool = RunOptions.locate_crossings,
-                   max_halvings: int = DEFAULT_HALVINGS, on_failure: str = "raise",
-                   progress: bool | None = None,
-                   chunks: int | None = None, solver_options: dict | None = None,
-                   max_steps: int | None = None, max_output_bytes: int | None = None,
+                   options: RunOptions = RunOptions(), limits: RunLimits = RunLimits(),
+                   on_failure: str = "raise", progress: bool | None = None,
                    devices=None) -> list[Results]:
     """Simulate several systems of identical structure in ONE jitted, vmapped program.
 
@@ -561,9 +531,8 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
         raise ModelError("simulate_batch needs systems of identical structure and shapes: build them "
                          "from the same model with the same pad_to")
     dt = DEFAULT_DT if dt is None else dt
-    solver, options, (n_int, sub, h, _), (per_chunk, n_chunks) = _prepare(
-        t_end, dt, solver, output_dt, drift_tolerance, locate_crossings, max_halvings, on_failure,
-        chunks, solver_options, batched=True)
+    solver, (n_int, sub, h, _), (per_chunk, n_chunks) = _prepare(
+        t_end, dt, solver, output_dt, options, limits, on_failure, batched=True)
     if not isinstance(solver, AbstractIntegrator):
         raise ModelError(f"simulate_batch runs fixed-step solvers ({', '.join(FIXED_STEP_SOLVERS)})")
     t0s = {float(s.t) for s in states}
@@ -571,7 +540,7 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
         raise ModelError("simulate_batch needs a common start time")
     t0 = t0s.pop()
     check_run_size(t_end, dt, output_dt, int(np.size(states[0].q)), int(systems[0].n_constraints),
-                   batch=len(systems), max_steps=max_steps, max_output_bytes=max_output_bytes)
+                   batch=len(systems), limits=limits)
     bs, bst = stack(systems), stack(states)
     if devices is not None and len(devices) > 1:
         bs, bst = _shard((bs, bst), list(devices), len(systems))

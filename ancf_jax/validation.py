@@ -57,15 +57,16 @@ def check_vector(name: str, value: Any, size: int) -> np.ndarray:
     return arr
 
 
-def check_count(name: str, value: Any, minimum: int = 1) -> int:
-    """Return ``value`` as an int if it is an integer >= minimum."""
+def check_count(name: str, value: Any, minimum: int = 1, maximum: int | None = None) -> int:
+    """Return ``value`` as an int if it is an integer in [minimum, maximum]."""
+    accepted = f"an integer >= {minimum}" if maximum is None else f"an integer in {minimum}..{maximum}"
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
         if isinstance(value, float) and value.is_integer():
             value = int(value)
         else:
-            raise ModelError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    if value < minimum:
-        raise ModelError(f"{name} must be an integer >= {minimum}, got {value!r}")
+            raise ModelError(f"{name} must be {accepted}, got {value!r}")
+    if value < minimum or (maximum is not None and value > maximum):
+        raise ModelError(f"{name} must be {accepted}, got {value!r}")
     return int(value)
 
 

@@ -114,15 +114,17 @@ def s0_variants(n, seed=1):
 def s0_batch(plan, exudyn, dense=False) -> dict:
     """M2 variants of s₀: one vmapped ancf_jax program per size against Exudyn serially
     (each variant's static equilibrium is solved, or read from the cache, untimed)."""
-    from ancf_jax.simulation import simulate_batch
+    from ancf_jax.integrate import RunLimits
+    from ancf_jax.simulation import make_solver, simulate_batch
     opts = C.ancf_settings("M2")
     if dense:
         opts = {**opts, "linear_solver": "dense"}
     built = [C.m2(plan["n"], s0=float(s)) for s in s0_variants(max(plan["sizes"]))]
     rows = []
     for n in plan["sizes"]:
-        kw = dict(t_end=plan["t_end"], dt=plan["dt"], output_dt=C.GRID, solver_options=opts,
-                  on_failure="return", progress=False, chunks=1)
+        kw = dict(t_end=plan["t_end"], dt=plan["dt"], output_dt=C.GRID,
+                  solver=make_solver("generalized-alpha", **opts), on_failure="return", progress=False,
+                  limits=RunLimits(chunks=1))
         systems, states = [b[0] for b in built[:n]], [b[1] for b in built[:n]]
         res = simulate_batch(systems, states, **kw)  # compiles
         compile_s = res[0].compile_time_s
@@ -156,13 +158,14 @@ def s0_batch(plan, exudyn, dense=False) -> dict:
 def m1_batch_row(system, state, n, plan, dt, options, label="batch"):
     """One ancf_jax batch row: the first n variants in one vmapped program (compiled
     once, then ``plan["reps"]`` timed runs). Returns (row, final tip Y of every member)."""
-    from ancf_jax.simulation import simulate_batch
+    from ancf_jax.integrate import RunLimits
+    from ancf_jax.simulation import make_solver, simulate_batch
     systems = [with_parameters(system, al, e) for al, e in variants(n)]
     # outputs on the 10 ms grid and ONE chunk for the whole run: under vmap the frozen
     # steps past t_end in a last, partly used 500-step chunk are not skipped (cond
     # becomes select) and would cost as much as real ones
-    kw = dict(t_end=plan["t_end"], dt=dt, output_dt=C.GRID, solver_options=options,
-              on_failure="return", progress=False, chunks=1)
+    kw = dict(t_end=plan["t_end"], dt=dt, output_dt=C.GRID, solver=make_solver("generalized-alpha", **options),
+              on_failure="return", progress=False, limits=RunLimits(chunks=1))
     res = simulate_batch(systems, [state] * n, **kw)  # compiles
     compile_s = res[0].compile_time_s
     walls = []

@@ -181,9 +181,9 @@ def ancf_settings(name: str) -> dict:
 
 def run_ancf(name, system, state, *, t_end, dt, solver="generalized-alpha", options=None,
              output_dt=None) -> Run:
-    from ancf_jax.simulation import simulate
+    from ancf_jax.simulation import make_solver, simulate
     res = simulate(system, state, t_end=t_end, dt=dt, output_dt=dt if output_dt is None else output_dt,
-                   solver=solver, solver_options=options or {}, on_failure="return", progress=False)
+                   solver=make_solver(solver, **(options or {})), on_failure="return", progress=False)
     return Run("ancf_jax", np.asarray(res.t), ancf_output(name, res), res.wall_time_s,
                res.compile_time_s, res.status, int(res.info.get("steps", 0)), int(np.sum(res.iterations)))
 

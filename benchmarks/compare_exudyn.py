@@ -57,11 +57,11 @@ H_STUDY = (2e-3, 1e-3, 5e-4, 2.5e-4)
 
 def ancf_run(name, system, state, *, t_end, dt, output_dt, rho_inf=0.9, **solver_options):
     """Run ancf_jax's generalized-α and return the compared outputs (failures kept)."""
-    from ancf_jax.simulation import simulate
+    from ancf_jax.simulation import make_solver, simulate
 
     from .exudyn_models import ancf_histories, model_outputs
     res = simulate(system, state, t_end=t_end, dt=dt, output_dt=output_dt, on_failure="return",
-                   progress=False, solver_options=dict(rho_inf=rho_inf, **solver_options))
+                   progress=False, solver=make_solver("generalized-alpha", rho_inf=rho_inf, **solver_options))
     return dict(t=np.asarray(res.t), outputs=model_outputs(name, system, ancf_histories(res)),
                 wall_time_s=res.wall_time_s, compile_time_s=res.compile_time_s, status=res.status,
                 failure_time=res.failure_time, newton_iterations=int(np.sum(res.iterations)),

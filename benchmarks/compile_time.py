@@ -38,12 +38,12 @@ def child(which: str) -> dict:
         return _m1_parts()
     if which == "M2-parts":
         return _m2_parts()
-    from ancf_jax.simulation import simulate_batch
+    from ancf_jax.simulation import make_solver, simulate_batch
     built = [C.m2(n, pad_to=max(M2_COUNTS)) for n in M2_COUNTS]
     opts = C.ancf_settings("M2")
     t0 = time.perf_counter()
     rs = simulate_batch([b[0] for b in built], [b[1] for b in built], t_end=0.05, dt=1e-3,
-                        solver_options=opts, on_failure="return", progress=False)
+                        solver=make_solver("generalized-alpha", **opts), on_failure="return", progress=False)
     return dict(compile_s=rs[0].compile_time_s, first_call_s=time.perf_counter() - t0,
                 status=[r.status for r in rs], solver_options=opts)
 
@@ -56,9 +56,10 @@ def _program_parts(system, state, solver_options, *, batched) -> dict:
     import jax.numpy as jnp
 
     from ancf_jax import simulation as S
-    solver, options, (n_int, sub, h, _), (per_chunk, _) = S._prepare(
-        0.05, 1e-3, "generalized-alpha", None, 1e-6, False, 6, "return", None, solver_options,
-        batched=batched)
+    options = S.RunOptions()
+    solver, (n_int, sub, h, _), (per_chunk, _) = S._prepare(
+        0.05, 1e-3, S.make_solver("generalized-alpha", **solver_options), None, options, S.RunLimits(),
+        "return", batched=batched)
     solver = solver.forward_only()  # as S._run_fixed
     init_fn, chunk_fn = (S._init_batch, S._chunk_batch) if batched else (S._init_single, S._chunk_single)
     out = {}

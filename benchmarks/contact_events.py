@@ -21,7 +21,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from ancf_jax.integrate import DEFAULT_HALVINGS, RunOptions  # noqa: E402
+from ancf_jax.integrate import RunOptions  # noqa: E402
 from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha  # noqa: E402
 from tests.dynamics import run_fixed  # noqa: E402
 from tests.test_moving_loads import K_C, M_BALL, T_BOUNCE, bounce_errors, bounce_model  # noqa: E402
@@ -41,7 +41,7 @@ def main() -> None:
             row = {"zeta": zeta, "h": h}
             for locate in (False, True):
                 run = run_fixed(sys_, state, GeneralizedAlpha().forward_only(), h, T_BOUNCE, chunk=60,
-                                options=RunOptions(locate_crossings=locate, max_halvings=DEFAULT_HALVINGS))
+                                options=RunOptions(locate_crossings=locate))
                 t_err, e_err = bounce_errors(run, zeta)
                 row["located" if locate else "plain"] = dict(contact_time_error_s=float(t_err),
                                                               restitution_error=float(e_err))

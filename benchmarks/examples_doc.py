@@ -117,7 +117,7 @@ All element counts run as one vmapped batch (meshes padded to the largest count)
 
 The curvature of the cubic interpolation jumps at nodes, so the acceleration of a sliding
 body jumps there. A fixed-step integrator that steps over a crossing loses its order;
-`simulate(..., locate_crossings=True)` splits the step at the crossing.
+`simulate(..., options=RunOptions(locate_crossings=True))` splits the step at the crossing.
 {_stamp_line(s3, "python -m benchmarks.locate_crossings")}
 {lc}"""
 

@@ -75,7 +75,7 @@ def ancf_tip():
     from ancf_jax.element.strain_energy import Formulation
     from ancf_jax.model import Model, body_point, node
     from ancf_jax.section import Section
-    from ancf_jax.simulation import simulate
+    from ancf_jax.simulation import make_solver, simulate
 
     # Exudyn's cable: engineering strain, material curvature, Gauss 5 / Gauss 3 points
     exudyn_cable = Formulation(axial_strain="engineering", curvature="material",
@@ -88,8 +88,8 @@ def ancf_tip():
     m.revolute("pin", node("cable", -1), body_point("bob"))
     system, state = m.build()
     res = simulate(system, state, t_end=T_END, dt=H, output_dt=0.01, progress=False,
-                   solver_options=dict(rho_inf=0.9, newton_tol=1e-10, refresh_every=1,
-                                       velocity_projection=False))
+                   solver=make_solver("generalized-alpha", rho_inf=0.9, newton_tol=1e-10, refresh_every=1,
+                                      velocity_projection=False))
     return res.body("bob")[:, :2]
 
 

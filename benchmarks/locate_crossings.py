@@ -1,5 +1,5 @@
 """RK4 convergence across node crossings of a sliding joint, with and without
-``simulate(..., locate_crossings=True)``.
+``simulate(..., options=RunOptions(locate_crossings=True))``.
 
 A body slides without friction on a clamped circular track (radius 1 m, 8 elements
 with angles alternating 0.2/0.4 rad, so the curvature of the cubic interpolation
@@ -20,6 +20,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from ancf_jax.integrate import RunOptions  # noqa: E402
 from ancf_jax.simulation import simulate  # noqa: E402
 from tests.dynamics import curve_motion, track_model, uneven_arc  # noqa: E402
 
@@ -37,8 +38,8 @@ def main() -> None:
     errors = {False: [], True: []}
     for h in STEPS:
         for locate in (False, True):
-            res = simulate(system, state, t_end=T_END, dt=h, solver="rk4", locate_crossings=locate,
-                           progress=False)
+            res = simulate(system, state, t_end=T_END, dt=h, solver="rk4",
+                           options=RunOptions(locate_crossings=locate), progress=False)
             ref, _ = curve_motion(nodes, lengths, S0, 0.0, res.t)
             errors[locate].append(float(np.max(np.abs(res.sliding("slider") - ref[:, 0]))))
         print(f"h = {h:g} s: plain {errors[False][-1]:.3e}, located {errors[True][-1]:.3e}", flush=True)

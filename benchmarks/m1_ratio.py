@@ -4,13 +4,13 @@ benchmarks/results/single_run.json (both h = 1.25 ms, 0-2 s), interleaved, one p
 import json, statistics, time
 from benchmarks import cases as C
 from benchmarks import exudyn_models as em
-from ancf_jax.simulation import simulate
+from ancf_jax.simulation import make_solver, simulate
 d = json.load(open("benchmarks/results/single_run.json"))
 row = [x for x in d["rows"] if x["model"] == "M1"][0]
 e = row["exudyn"]["chosen"]
 system, state = C.m1(6)
 opts = dict(refresh_first=True, contraction=0.1, linear_solver="dense")
-kw = dict(t_end=2.0, dt=1.25e-3, output_dt=C.GRID, solver_options=opts, progress=False)
+kw = dict(t_end=2.0, dt=1.25e-3, output_dt=C.GRID, solver=make_solver("generalized-alpha", **opts), progress=False)
 r = simulate(system, state, **kw)
 a_t, e_t = [], []
 for _ in range(5):

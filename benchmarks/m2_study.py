@@ -19,7 +19,7 @@ import numpy as np
 
 from ancf_jax.models.m2 import OUTPUTS, RUN, m2_initial
 from ancf_jax.outputs import evaluate
-from ancf_jax.simulation import simulate, simulate_batch
+from ancf_jax.simulation import make_solver, simulate, simulate_batch
 
 from .common import table, write
 
@@ -35,7 +35,7 @@ def main(argv=None):
     kw = dict(t_end=t_end, output_dt=1e-2, progress=False, on_failure="return")
     built = [m2_initial(n, pad_to=max(counts)) for n in counts]
     runs = simulate_batch([b[0] for b in built], [b[1] for b in built], dt=dt_ref,
-                          solver_options=opts, **kw)
+                          solver=make_solver("generalized-alpha", **opts), **kw)
     cols = {n: evaluate(r, OUTPUTS) for n, r in zip(counts, runs)}
     print(f"mesh batch {counts}: {runs[0].info['batch_wall_time_s']:.1f} s "
           f"(compile {runs[0].compile_time_s:.1f} s)", flush=True)
@@ -59,7 +59,7 @@ def main(argv=None):
     system, state, _ = m2_initial(24)
     steps = {}
     for dt, rho in ((1e-3, opts["rho_inf"]), (5e-4, opts["rho_inf"]), (2.5e-4, opts["rho_inf"]), (2.5e-4, 0.9)):
-        r = simulate(system, state, dt=dt, solver_options={**opts, "rho_inf": rho}, **kw)
+        r = simulate(system, state, dt=dt, solver=make_solver("generalized-alpha", **{**opts, "rho_inf": rho}), **kw)
         steps[(dt, rho)] = evaluate(r, OUTPUTS)
         print(f"24 elements, dt = {dt:g} s, rho_inf = {rho}: {r.status}, run {r.wall_time_s:.1f} s", flush=True)
     sref = steps[(2.5e-4, 0.9)]

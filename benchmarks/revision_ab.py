@@ -22,13 +22,13 @@ legacy = sys.argv[2] == "old"
 
 import ancf_jax  # noqa: E402
 from ancf_jax.models.m1 import m1_model  # noqa: E402
-from ancf_jax.simulation import simulate  # noqa: E402
+from ancf_jax.simulation import make_solver, simulate  # noqa: E402
 from benchmarks.batch import m1_batch_row  # noqa: E402
 
 system, state = m1_model(6).build()
 base = dict(refresh_first=True, contraction=0.1)
 single = dict(base, **({"dense": True} if legacy else {"linear_solver": "dense"}))
-kw = dict(t_end=2.0, dt=1.25e-3, output_dt=0.01, solver_options=single, progress=False)
+kw = dict(t_end=2.0, dt=1.25e-3, output_dt=0.01, solver=make_solver("generalized-alpha", **single), progress=False)
 r = simulate(system, state, **kw)
 walls = [simulate(system, state, **kw).wall_time_s for _ in range(7)]
 out = dict(checkout=sys.argv[2], package=ancf_jax.__file__, single_compile_s=r.compile_time_s,

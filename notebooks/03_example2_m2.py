@@ -42,7 +42,7 @@ from ancf_jax import plotting
 from ancf_jax.models.m2 import M2, OUTPUTS, RUN, m2_initial
 from ancf_jax.outputs import evaluate
 from ancf_jax.reports import report_m2
-from ancf_jax.simulation import simulate_batch
+from ancf_jax.simulation import make_solver, simulate_batch
 
 # ancf_jax.plotting selects the non-interactive Agg backend (for the command line);
 # in Jupyter, switch back to inline figures:
@@ -65,7 +65,8 @@ print("solver:", RUN["solver"], RUN["solver_options"], "dt =", RUN["dt"], "s")
 # %%
 built = [m2_initial(n, pad_to=max(COUNTS)) for n in COUNTS]
 results = simulate_batch([b[0] for b in built], [b[1] for b in built], t_end=T_END, dt=RUN["dt"],
-                         output_dt=RUN["output_dt"], solver_options=RUN["solver_options"], progress=False)
+                         output_dt=RUN["output_dt"], solver=make_solver(RUN["solver"], **RUN["solver_options"]),
+                         progress=False)
 runs = dict(zip(COUNTS, results))
 ref = max(COUNTS)
 rn = runs[ref]

@@ -17,7 +17,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ancf_jax import mesh
-from ancf_jax.integrate import RunOptions, initial_loop, integrate_fixed
+from ancf_jax.integrate import NO_RETRIES, initial_loop, integrate_fixed
 from ancf_jax.model import Model, body_point, node
 from ancf_jax.section import Section
 
@@ -51,7 +51,7 @@ class Run:
     status: int
 
 
-def run_fixed(system, state, solver, h, t_end, *, chunk=50, options=RunOptions()):
+def run_fixed(system, state, solver, h, t_end, *, chunk=50, options=NO_RETRIES):
     """Run ``t_end / h`` steps (a multiple of ``chunk``) of size h; returns a :class:`Run`
     with the initial state and every step."""
     n = int(round(t_end / h))

@@ -106,7 +106,7 @@ def sliding_joint_term():
     from ancf_jax import mesh
     from ancf_jax.model import Model, node
     from ancf_jax.section import Section
-    from ancf_jax.simulation import simulate
+    from ancf_jax.simulation import make_solver, simulate
 
     m = Model(gravity=(0.0, -9.81))
     m.add_beam("cable", mesh.straight((0.0, 0.0), (1.0, 0.0), 1.0, 4),
@@ -125,7 +125,8 @@ def sliding_joint_term():
         return r.histories.sliding_point[:, 0], r.histories.sliding[:, 0]
 
     res = simulate(system, state, t_end=0.3, dt=1e-3, output_dt=0.01, progress=False,
-                   solver_options=dict(newton_tol=1e-10, velocity_projection=False, refresh_every=1))
+                   solver=make_solver("generalized-alpha", newton_tol=1e-10, velocity_projection=False,
+                                      refresh_every=1))
     p_ancf = res.sliding_point("s")
     assert np.ptp(res.sliding("s")) > 0.3  # it slid over at least one node
     p_raw, _ = exudyn_point(False)
@@ -267,14 +268,15 @@ def from_exudyn_dynamics():
     mechanism agree to 1e-9 (measured 5.5e-14). Untranslatable items raise, naming the item."""
     from ancf_jax.errors import ModelError
     from ancf_jax.interop.exudyn import from_exudyn
-    from ancf_jax.simulation import simulate
+    from ancf_jax.simulation import make_solver, simulate
 
     mbs, sensors = _exudyn_mechanism()
     model = from_exudyn(mbs)
     assert model.gravity[1] == -9.81
     system, state = model.build()
     res = simulate(system, state, t_end=0.2, dt=1e-3, output_dt=0.01, progress=False,
-                   solver_options=dict(rho_inf=0.9, newton_tol=1e-10, refresh_every=1, velocity_projection=False))
+                   solver=make_solver("generalized-alpha", rho_inf=0.9, newton_tol=1e-10, refresh_every=1,
+                                      velocity_projection=False))
     assert res.status == "ok"
     ss = em.simulation_settings(t_end=0.2, h=1e-3, n_steps=200, output_dt=0.01, relative_tolerance=1e-8,
                                 absolute_tolerance=1e-12, modified_newton=False, max_iterations=50)

@@ -161,7 +161,7 @@ def test_located_slack_taut_transitions_restore_second_order(rope_runs):
     height error stays erratic, ~first order (measured 5.4e-4, 4.8e-4, 3.0e-4 m with
     location, 6.7e-4, 5.4e-4, 1.3e-4 m without): the second substep straddles the force
     jump by KINK_MARGIN of the step (docs/cable-machinery.md)."""
-    located = RunOptions(locate_crossings=True)
+    located = RunOptions(locate_crossings=True, max_halvings=0)
     steps = (0.002, 0.001, 0.0005)
     errors, balances = [], []
     for h in steps:
@@ -420,7 +420,7 @@ def test_friction_reversals_are_located():
     force's near-jump still falls inside the step after the split, as for a damped
     rope engaging; docs/cable-machinery.md). Each located run finds the three
     reversals (and three node crossings), none in the sticking phase (the dead band)."""
-    plain, located = RunOptions(max_halvings=6), RunOptions(locate_crossings=True, max_halvings=6)
+    plain, located = RunOptions(), RunOptions(locate_crossings=True)
     errors = {}
     for label, options in (("plain", plain), ("located", located)):
         for h in (0.004, 0.001):

@@ -19,6 +19,7 @@ from ancf_jax import simulation
 from ancf_jax.cli import main
 from ancf_jax.errors import ModelError, SimulationInterrupted
 from ancf_jax.failures import Failure
+from ancf_jax.integrate import RunLimits
 from ancf_jax.simulation import MAX_STEPS, check_run_size
 
 from .json_units import assert_unit_keys
@@ -193,10 +194,10 @@ def test_max_steps_is_checked_and_lifts_the_limit():
     n = MAX_STEPS * 2
     with pytest.raises(ModelError, match=r"max_steps"):
         check_run_size(n * 1e-3, 1e-3, 1.0, 10)
-    steps, size = check_run_size(n * 1e-3, 1e-3, 1.0, 10, max_steps=n)
+    steps, size = check_run_size(n * 1e-3, 1e-3, 1.0, 10, limits=RunLimits(max_steps=n))
     assert steps == n and size < 2**30
     with pytest.raises(ModelError, match=r"GiB of output"):
-        check_run_size(1e6, 1e-3, None, 10_000, max_steps=10**10)
+        check_run_size(1e6, 1e-3, None, 10_000, limits=RunLimits(max_steps=10**10))
 
 
 def test_adaptive_runs_count_output_not_steps():
@@ -266,7 +267,7 @@ def test_adaptive_run_out_of_steps_says_so():
     keeping the rows before."""
     sc = pendulum()
     system, state = sc.build()
-    kw = {**sc.solver.simulate_kwargs(), "solver": "tsit5", "solver_options": {"max_steps": 3}}
+    kw = {**sc.solver.simulate_kwargs(), "solver": simulation.make_solver("tsit5", max_steps=3)}
     res = simulation.simulate(system, state, **kw, on_failure="return", progress=False)
     assert res.status == "max_steps" == Failure.MAX_STEPS.reason
     assert "adaptive tsit5 solver took max_steps = 3 steps" in res.message

@@ -13,7 +13,7 @@ import jax
 import numpy as np
 import pytest
 
-from ancf_jax.integrate import RunOptions
+from ancf_jax.integrate import RunLimits, RunOptions
 from ancf_jax.integrators.explicit import RK4
 
 from .dynamics import curve_motion, observed_orders, run_fixed, track_model, uneven_arc
@@ -31,7 +31,7 @@ def crossing_study():
     phi = jax.jit(jax.vmap(lambda sy, q: sy.constraint(q), in_axes=(None, 0)))
     out = {}
     for locate in (False, True):
-        options = RunOptions(locate_crossings=locate)
+        options = RunOptions(locate_crossings=locate, max_halvings=0)
         rows = []
         for h in STEPS:
             run = run_fixed(system, state, RK4(), h, T_END, chunk=10, options=options)
@@ -82,14 +82,14 @@ def test_failed_newton_step_is_completed_in_substeps():
     2 ms or less (one halving is not always enough: measured), the run completes, and it
     stays within the O(h²) difference between 4 ms and 2 ms runs of the 2 ms run."""
     from ancf_jax.models.m1 import m1_model
-    from ancf_jax.simulation import simulate
+    from ancf_jax.simulation import make_solver, simulate
 
     system, state = m1_model(6).build()
     kw = dict(t_end=0.2, output_dt=4e-3, progress=False, on_failure="return",
-              solver_options=dict(max_iterations=6))
-    plain = simulate(system, state, dt=4e-3, max_halvings=0, **kw)
-    retried = simulate(system, state, dt=4e-3, max_halvings=3, **kw)
-    fine = simulate(system, state, dt=2e-3, max_halvings=0, **kw)
+              solver=make_solver("generalized-alpha", max_iterations=6))
+    plain = simulate(system, state, dt=4e-3, options=RunOptions(max_halvings=0), **kw)
+    retried = simulate(system, state, dt=4e-3, options=RunOptions(max_halvings=3), **kw)
+    fine = simulate(system, state, dt=2e-3, options=RunOptions(max_halvings=0), **kw)
     assert plain.status == "newton" and 0.0 < plain.failure_time < 0.2
     assert retried.status == "ok" and fine.status == "ok"
     # up to the failure the retried run is the plain one, step for step: to rounding (the
@@ -141,9 +141,9 @@ def test_failed_batch_member_takes_negligible_steps():
                for a, g in ((failing, 1.0), (running, 0.1))]
     h, t_end = 4e-3, 0.06
     _STEP_LOG.clear()
-    res = simulate_batch(systems, [state] * 2, t_end=t_end, dt=h, output_dt=h, max_halvings=0,
-                         solver=LoggedSteps(root_finder=ModifiedNewton(max_iterations=6)), on_failure="return", progress=False,
-                         chunks=1)
+    res = simulate_batch(systems, [state] * 2, t_end=t_end, dt=h, output_dt=h,
+                         options=RunOptions(max_halvings=0), solver=LoggedSteps(root_finder=ModifiedNewton(max_iterations=6)), on_failure="return",
+                         progress=False, limits=RunLimits(chunks=1))
     assert res[0].status == "newton" and res[1].status == "ok"
     n_ok = int(round(res[0].failure_time / h)) - 1  # steps completed before the failing one
     log = np.concatenate(_STEP_LOG)

@@ -26,7 +26,7 @@ import pytest
 
 from ancf_jax import mesh
 from ancf_jax.functions import ConstantSpeed
-from ancf_jax.integrate import DEFAULT_HALVINGS, RunOptions
+from ancf_jax.integrate import RunOptions
 from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
 from ancf_jax.model import Model, body_point, node
 from ancf_jax.results import Results
@@ -192,7 +192,7 @@ def bounce_runs():
                           jnp.asarray(2 * zeta * np.sqrt(K_C * M_BALL), float))
         for h in STEPS:
             run = run_fixed(sys, state, GeneralizedAlpha().forward_only(), h, T_BOUNCE, chunk=60,
-                            options=RunOptions(locate_crossings=True, max_halvings=DEFAULT_HALVINGS))
+                            options=RunOptions(locate_crossings=True))
             assert run.status == 0
             out[zeta, h] = run
     return out

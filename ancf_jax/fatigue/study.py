@@ -33,7 +33,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ModelError
-from ..integrate import RunOptions
+from ..integrate import NO_RETRIES, RunOptions
 from ..integrators.base import AbstractIntegrator
 from ..simulation import DEFAULT_SOLVER, make_solver, time_grid, trajectory
 from ..system import State, System
@@ -120,7 +120,7 @@ class StudyResult:
 
 def damage_function(system: System, state: State, parameters, settings: FatigueSettings, *,
                     t_end: float, dt: float, output_dt: float | None = None, solver=DEFAULT_SOLVER,
-                    setter: Setter | None = None, options: RunOptions = RunOptions()):
+                    setter: Setter | None = None, options: RunOptions = NO_RETRIES):
     """The damage of the assessed points as a pure function of parameters.
 
     Args:
@@ -189,7 +189,7 @@ def damage_function(system: System, state: State, parameters, settings: FatigueS
 def study(system: System, state: State, parameters, values, settings: FatigueSettings, *,
           t_end: float, dt: float, output_dt: float | None = None, solver=DEFAULT_SOLVER,
           derivatives: bool = True, setter: Setter | None = None,
-          options: RunOptions = RunOptions()) -> StudyResult:
+          options: RunOptions = NO_RETRIES) -> StudyResult:
     """Damage along the beams for many parameter values, in one vmapped program (and
     with ∂damage/∂p by forward mode in the same pass when ``derivatives``).
 

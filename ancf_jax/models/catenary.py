@@ -744,6 +744,7 @@ def run_pantograph_catenary(catenary: CatenaryDesign = CatenaryDesign(),
     earlier end). ``pad_to``: element slots of both wires; with it, equal ``t_end``,
     ``output_dt = dt`` and ``chunks`` in proportion to the step count, runs of
     different meshes and steps share one compiled program."""
+    from ..integrate import RunLimits
     from ..simulation import simulate
     if not (isinstance(speed_kmh, (int, float)) and 0 < speed_kmh <= 600):
         raise ModelError(f"speed_kmh must be a number in (0, 600] km/h, got {speed_kmh!r}")
@@ -759,7 +760,7 @@ def run_pantograph_catenary(catenary: CatenaryDesign = CatenaryDesign(),
                 catenary.length - 0.5 * catenary.droppers[0])
     span = (x_end - x0) / v if t_end is None else min(float(t_end), (x_end - x0) / v)
     res = simulate(system, state, t_end=span, dt=dt, output_dt=output_dt or dt, solver=solver, progress=None,
-                   chunks=chunks)
+                   limits=RunLimits(chunks=chunks))
     return analyse_pantograph_run(res, catenary, speed_kmh=speed_kmh, start=x0, spans=spans, cutoff=cutoff)
 
 

@@ -14,6 +14,7 @@ from typing import Any, Optional
 import jax.numpy as jnp
 import numpy as np
 
+from ..integrate import RunOptions
 from ..model import Model, build_in_equilibrium
 from ..outputs import Output
 from ..results import Results
@@ -47,10 +48,17 @@ class RunSettings:
     locate_crossings: bool
 
     def simulate_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of :func:`ancf_jax.simulation.simulate`."""
-        return dict(t_end=self.t_end, dt=self.dt, solver=self.solver, output_dt=self.output_dt,
-                    solver_options=dict(self.solver_options), drift_tolerance=self.drift_tolerance,
-                    locate_crossings=self.locate_crossings)
+        """Keyword arguments of :func:`ancf_jax.simulation.simulate`: the solver instance
+        (:func:`~ancf_jax.simulation.make_solver`) and the
+        :class:`~ancf_jax.integrate.RunOptions` these settings describe."""
+        from ..simulation import make_solver
+        return dict(t_end=self.t_end, dt=self.dt, solver=make_solver(self.solver, **self.solver_options),
+                    output_dt=self.output_dt, options=self.run_options())
+
+    def run_options(self) -> RunOptions:
+        """The :class:`~ancf_jax.integrate.RunOptions` of these settings (the others at
+        their defaults)."""
+        return RunOptions(drift_tolerance=self.drift_tolerance, locate_crossings=self.locate_crossings)
 
 
 class Scenario:

@@ -24,6 +24,7 @@ import numpy as np
 from .._version import __version__
 from ..errors import ModelError
 from ..scenario import ScenarioError, load_scenario
+from ..scenario.scenario import RunSettings
 from ..outputs import output_units
 from ..simulation import FIXED_STEP_SOLVERS, time_grid
 from .design import Param, SweepError, make_design, override
@@ -120,7 +121,8 @@ def _load(source, items, key=None):
 
 
 def _run_kwargs(sc) -> dict:
-    kw = sc.solver.simulate_kwargs()
+    """The scenario's run settings as plain data (a chunk task's ``run``; grouping key)."""
+    kw = dataclasses.asdict(sc.solver)
     kw["solver_options"] = dict(sorted(kw["solver_options"].items()))
     return kw
 
@@ -259,8 +261,8 @@ def run_chunk(task: ChunkTask) -> dict:
     states = [b[1] for b in built] + [built[-1][1]] * fill
     t0 = time.perf_counter()
     try:
-        results = simulate_batch(systems, states, **kw, on_failure="return", progress=False,
-                                 devices=jax.devices() if task.devices else None)
+        results = simulate_batch(systems, states, **RunSettings(**kw).simulate_kwargs(), on_failure="return",
+                                 progress=False, devices=jax.devices() if task.devices else None)
     except Exception as e:  # noqa: BLE001 - a chunk never stops the sweep
         for i in ok:
             out["status"][i], out["message"][i] = "error", f"{type(e).__name__}: {e}".splitlines()[0]

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from ancf_jax.models.m1 import m1_model
-from ancf_jax.simulation import simulate
+from ancf_jax.integrate import NO_RETRIES
+from ancf_jax.simulation import make_solver, simulate
 
 T_END, H = 0.1, 5e-3
 
@@ -22,8 +23,8 @@ def m1():
 
 def _run(m1, **options):
     system, state = m1
-    return simulate(system, state, t_end=T_END, dt=H, max_halvings=0, on_failure="return",
-                    progress=False, solver_options=options)
+    return simulate(system, state, t_end=T_END, dt=H, options=NO_RETRIES, on_failure="return",
+                    progress=False, solver=make_solver("generalized-alpha", **options))
 
 
 def test_refresh_first_takes_large_steps_without_retries_and_matches_full_newton(m1):

@@ -9,7 +9,7 @@ from scipy.optimize import brentq
 from ancf_jax.element import Formulation
 from ancf_jax.modal import modal_analysis
 from ancf_jax.models.m1 import M1, m1_model
-from ancf_jax.simulation import simulate, simulate_batch
+from ancf_jax.simulation import make_solver, simulate, simulate_batch
 from ancf_jax.statics import solve_static
 
 from ..beam_theory import clamped_free_frequencies
@@ -119,7 +119,7 @@ def test_step_halving_and_energy_balance():
     """Generalized-α is second order and, with ρ∞ = 1 (no numerical dissipation), the
     energy balance T + V + U + D stays constant to O(h²)."""
     system, state = m1_model(6).build()
-    kw = dict(t_end=0.2, solver_options=dict(rho_inf=1.0), progress=False)
+    kw = dict(t_end=0.2, solver=make_solver("generalized-alpha", rho_inf=1.0), progress=False)
     # output every step: the step is traced data, so the three runs share one compilation
     runs = {dt: simulate(system, state, dt=dt, **kw) for dt in (2e-3, 1e-3, 5e-4)}
     tip = {dt: r.node("beam", -1)[:: int(round(2e-3 / dt)), 1] for dt, r in runs.items()}

@@ -7,7 +7,7 @@ from scipy.integrate import solve_bvp
 
 from ancf_jax.element import Formulation
 from ancf_jax.models.m2 import M2, m2_initial, m2_model
-from ancf_jax.simulation import simulate, simulate_batch
+from ancf_jax.simulation import make_solver, simulate, simulate_batch
 from ancf_jax.statics import solve_static
 
 L, SPAN, S0 = M2["length"], M2["span"], M2["s0"]
@@ -135,8 +135,8 @@ def test_free_trolley_rests_where_the_cable_is_horizontal():
 def batch():
     """12 and 24 elements in one vmapped run (padded to 24), and 12 elements alone."""
     built = [m2_initial(n, pad_to=24) for n in (12, 24)]
-    kw = dict(t_end=0.15, dt=1e-3, output_dt=1e-2, solver_options=dict(rho_inf=0.5, max_iterations=30),
-              progress=False)
+    kw = dict(t_end=0.15, dt=1e-3, output_dt=1e-2, progress=False,
+              solver=make_solver("generalized-alpha", rho_inf=0.5, max_iterations=30))
     runs = simulate_batch([b[0] for b in built], [b[1] for b in built], **kw)
     system, state, _ = m2_initial(12)
     alone = simulate(system, state, **kw)

@@ -85,7 +85,7 @@ def test_defaults_are_written_once():
     assert solver["name"].default == DEFAULT_SOLVER == default(simulate, "solver")
     assert solver["dt"].default == DEFAULT_DT
     for name in ("drift_tolerance", "locate_crossings"):
-        assert solver[name].default == getattr(RunOptions(), name) == default(simulate, name)
+        assert solver[name].default == getattr(RunOptions(), name) == getattr(default(simulate, "options"), name)
     assert schema.FormulationSpec().model_dump() == {k: getattr(Formulation(), k) for k in Formulation.__dataclass_fields__}
     assert schema.FrictionSpec.model_fields["regularization"].default == DEFAULT_REGULARIZATION
     curve = SNCurve.eurocode(schema.SNCurveSpec().reference_range)

@@ -1,7 +1,10 @@
 """Loading: shipped names, --set overrides, run settings, outputs and summaries."""
 
+import dataclasses
+
 import pytest
 
+from ancf_jax.integrate import RunOptions
 from ancf_jax.scenario import ScenarioError, load_scenario, shipped_scenarios
 from ancf_jax.scenario.loader import parse_override
 
@@ -58,9 +61,13 @@ def test_overrides_reach_the_settings(no_build):
     assert sc.beam_elements == {"cable": 12}
     assert sc.spec.joints["slider"].s == 1.0
     run = sc.solver
-    assert run.simulate_kwargs() == dict(t_end=0.5, dt=1e-3, solver="generalized-alpha", output_dt=0.05,
-                                         solver_options={"rho_inf": 0.8, "max_iterations": 30},
-                                         drift_tolerance=1e-6, locate_crossings=False)
+    assert dataclasses.asdict(run) == dict(t_end=0.5, dt=1e-3, solver="generalized-alpha", output_dt=0.05,
+                                           solver_options={"rho_inf": 0.8, "max_iterations": 30},
+                                           drift_tolerance=1e-6, locate_crossings=False)
+    kw = run.simulate_kwargs()  # the composed solver and the run options they describe
+    assert (kw["solver"].rho_inf, kw["solver"].root_finder.max_iterations) == (0.8, 30)
+    assert kw["options"] == RunOptions(drift_tolerance=1e-6, locate_crossings=False)
+    assert {k: kw[k] for k in ("t_end", "dt", "output_dt")} == dict(t_end=0.5, dt=1e-3, output_dt=0.05)
     assert "beams.cable.elements=12" in sc.summary()
 
 
