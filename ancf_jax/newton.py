@@ -159,13 +159,15 @@ class ModifiedNewton(eqx.Module):
 
         def tangent_solve(g, y):
             # J x = y with the matrix at the initial iterate and iterative refinement
-            # (compiled only into code that differentiates the solve)
+            # (compiled only into code that differentiates the solve); the first
+            # iterate is J0⁻¹ y (refining from x = 0 would evaluate g(0) = 0: a wasted
+            # linearized residual per step and tangent)
             fac = self.factor(linearize, jax.lax.stop_gradient(x0), chain_factor)
 
             def refine(_, x):
                 return x + self.linear_solver.compute(fac, y - g(x))
 
-            return jax.lax.fori_loop(0, refinement + 1, refine, jnp.zeros_like(y))
+            return jax.lax.fori_loop(0, refinement, refine, self.linear_solver.compute(fac, y))
 
         x, (iters, conv) = jax.lax.custom_root(residual, x0, solve, tangent_solve, has_aux=True)
         return NewtonSolution(x, jax.lax.stop_gradient(iters).astype(jnp.int32),
