@@ -8,9 +8,12 @@ with the equal-accuracy step of M1 from ``results/single_run.json`` (else 1 ms).
 
 Timed (compiled with ``jax.jit(...).lower().compile()``, compile time reported
 separately; medians over ``reps`` rounds that run every program once, interleaved):
-one forward evaluation of the loss; value and gradient by ``jax.value_and_grad``; the
-gradient by central finite differences (4 forward evaluations, relative step 1e-4),
-also used to check the AD gradient.
+one forward evaluation of the loss; value and gradient by ``jax.value_and_grad``
+(reverse mode); value and gradient by forward mode (one ``jax.jvp`` per parameter in
+one ``vmap``, as ``ancf_jax.identification``'s Gauss–Newton fit differentiates with
+``jax.jacfwd``: the cheaper mode for a few parameters); the gradient by central finite
+differences (4 forward evaluations, relative step 1e-4), also used to check the AD
+gradient.
 Exudyn: one forward run of the same case at its equal-accuracy settings; it has no
 gradients (finite differences only) and no stiffness-proportional β for the cable.
 
@@ -75,6 +78,20 @@ def make_loss(system, state, solver, t_end, dt):
     return loss, tip
 
 
+def forward_mode(loss):
+    """(value, gradient) of ``loss(theta, y)`` by forward mode: one JVP per component
+    of theta, vmapped over the unit tangents (the primal run is shared)."""
+    import jax
+    import jax.numpy as jnp
+
+    def value_and_grad(theta, y):
+        vals, ders = jax.vmap(lambda e: jax.jvp(lambda th: loss(th, y), (theta,), (e,)))(
+            jnp.eye(theta.size, dtype=theta.dtype))
+        return vals[0], ders
+
+    return value_and_grad
+
+
 def _status(system, state, solver, t_end, dt, theta):
     import equinox as eqx
 
@@ -129,7 +146,11 @@ def main(argv=None, *, quick=None, exudyn=None):
     t0 = time.perf_counter()
     vg = jax.jit(jax.value_and_grad(loss)).lower(theta0, y_meas).compile()
     compile_vg = time.perf_counter() - t0
-    print(f"gradient: compile forward {compile_fwd:.1f} s, value_and_grad {compile_vg:.1f} s", flush=True)
+    t0 = time.perf_counter()
+    vg_fwd = jax.jit(forward_mode(loss)).lower(theta0, y_meas).compile()
+    compile_vg_fwd = time.perf_counter() - t0
+    print(f"gradient: compile forward {compile_fwd:.1f} s, value_and_grad {compile_vg:.1f} s, "
+          f"forward mode {compile_vg_fwd:.1f} s", flush=True)
     default_refinement = solver.refinement
     variants = {default_refinement: (vg, compile_vg)}
     for r in REFINEMENTS:
@@ -150,10 +171,12 @@ def main(argv=None, *, quick=None, exudyn=None):
         return jnp.stack(g)
 
     # interleaved repetitions: a drift in the machine's speed affects every program alike
-    t_fwd, t_fd, t_var, got = [], [], {r: [] for r in variants}, {}
+    t_fwd, t_fd, t_var, got, t_fm = [], [], {r: [] for r in variants}, {}, []
     for _ in range(plan["reps"]):
         value, t = _timed(fwd, theta0, y_meas, reps=1)
         t_fwd += t
+        (_, grad_fm), t = _timed(vg_fwd, theta0, y_meas, reps=1)
+        t_fm += t
         for r, (prog, _) in variants.items():
             got[r], t = _timed(prog, theta0, y_meas, reps=1)
             t_var[r] += t
@@ -176,9 +199,15 @@ def main(argv=None, *, quick=None, exudyn=None):
                median_finite_differences_s=C.median(t_fd),
                ratio_value_and_grad_to_forward=C.median(t_vg) / C.median(t_fwd),
                ratio_fd_to_forward=C.median(t_fd) / C.median(t_fwd),
+               compile_forward_mode_s=compile_vg_fwd, forward_mode_s=t_fm,
+               median_forward_mode_s=C.median(t_fm),
+               ratio_forward_mode_to_forward=C.median(t_fm) / C.median(t_fwd),
+               forward_mode_rel_difference_to_reverse=float(np.max(
+                   np.abs(np.asarray(grad_fm) - grad) / np.maximum(np.abs(grad), 1e-300))),
                command="python -m benchmarks.run" + (" --quick" if quick else "") + " --only gradient")
     print(f"gradient: forward {out['median_forward_s']:.3f} s, value+grad {out['median_value_and_grad_s']:.3f} s "
-          f"(x{out['ratio_value_and_grad_to_forward']:.2f}), FD {out['median_finite_differences_s']:.3f} s; "
+          f"(x{out['ratio_value_and_grad_to_forward']:.2f}), forward mode {out['median_forward_mode_s']:.3f} s "
+          f"(x{out['ratio_forward_mode_to_forward']:.2f}), FD {out['median_finite_differences_s']:.3f} s; "
           f"AD vs FD rel. difference {rel.max():.1e}", flush=True)
     out.update(refinement_sweep({r: (got[r][1], t_var[r], variants[r][1]) for r in variants},
                                 default_refinement, out["median_forward_s"]))
