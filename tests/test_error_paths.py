@@ -19,7 +19,7 @@ from ancf_jax import simulation
 from ancf_jax.cli import main
 from ancf_jax.errors import ModelError, SimulationInterrupted
 from ancf_jax.failures import Failure
-from ancf_jax.integrate import RunLimits
+from ancf_jax.integrate import RunLimits, RunOptions
 from ancf_jax.simulation import MAX_STEPS, check_run_size
 
 from .json_units import assert_unit_keys
@@ -188,6 +188,34 @@ def test_check_and_synth_take_max_steps(capsys, tmp_path):
                 "solver.t_end = 200 s", "2e+05 time steps", "--max-steps = 1e+03")
     usage_error(["synth", "m1", "--noise", "0", "--max-steps", "10", "--out", str(tmp_path / "y.csv")],
                 capsys, "time steps", "--max-steps = 10")
+
+
+@pytest.mark.parametrize("make, match", [
+    (lambda: RunOptions(drift_tolerance=-1e-6), r"^drift_tolerance must be a finite number > 0 m, got -1e-06$"),
+    (lambda: RunOptions(max_halvings=31), r"^max_halvings must be an integer in 0\.\.30, got 31$"),
+    (lambda: RunOptions(max_halvings=1.5), r"^max_halvings must be an integer in 0\.\.30, got 1\.5$"),
+    (lambda: RunOptions(crossing_iterations=0), r"^crossing_iterations must be an integer in 1\.\.50"),
+    (lambda: RunOptions(locate_crossings="yes"), r"^locate_crossings must be true or false"),
+    (lambda: RunOptions(max_sliding_step=0.0), r"^max_sliding_step must be a finite number > 0"),
+    (lambda: RunLimits(max_steps=0), r"^max_steps must be an integer >= 1, got 0$"),
+    (lambda: RunLimits(max_output_bytes=float("inf")), r"^max_output_bytes must be a finite number > 0"),
+    (lambda: RunLimits(chunks=0), r"^chunks must be an integer >= 1, got 0$"),
+])
+def test_run_options_refuse_bad_values_on_construction(make, match):
+    """RunOptions and RunLimits check their values when they are made (one line, the
+    parameter and its accepted range), before any run is prepared."""
+    with pytest.raises(ModelError, match=match):
+        make()
+
+
+def test_simulate_refuses_options_of_the_wrong_type_before_compiling():
+    from ancf_jax.models.m1 import m1_model
+    system, state = m1_model(2).build()
+    for kw, match in ((dict(options={"locate_crossings": True}), r"^options must be a RunOptions, got dict$"),
+                      (dict(limits=10), r"^limits must be a RunLimits, got int$"),
+                      (dict(solver=3), r"^solver must be one of .* or an AbstractSolver instance")):
+        with pytest.raises(ModelError, match=match):
+            simulation.simulate(system, state, t_end=0.01, **kw)
 
 
 def test_max_steps_is_checked_and_lifts_the_limit():
