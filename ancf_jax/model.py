@@ -49,7 +49,7 @@ from .functions import AbstractPath, Constant, ConstantSpeed
 from .sliding import DEFAULT_REGULARIZATION, SlidingDriveForce, SlidingFriction, SlidingServo
 from .statics import DEFAULTS as STATIC_DEFAULTS
 from .system import State, System
-from .validation import (check_choice, check_finite, check_nonnegative, check_positive,
+from .validation import (check_choice, check_finite, check_nonnegative, check_positive, coincide_tolerance,
                          check_vector)
 
 
@@ -976,7 +976,7 @@ class Model:
         # the model's size, for tolerances of initial distances (points that must coincide)
         size = max([float(np.max(np.abs(x[:, :2]))) for x in nodes0 if x.size]
                    + [float(np.max(np.abs(poses[:, :2]))) if poses.size else 0.0])
-        coincide = 1e-9 * size + 1e-12
+        coincide = coincide_tolerance(size)
 
         # ---- constraints
         constraints = []

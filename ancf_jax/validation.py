@@ -10,6 +10,14 @@ import numpy as np
 from .errors import ModelError
 
 
+def coincide_tolerance(size: float) -> float:
+    """Distance [m] at or below which two points of a model of ``size`` [m] (its largest
+    coordinate) count as coinciding at the initial state: a spring's ends that must
+    start apart, a fixed joint's body that must start at its point (the model builder
+    and the scenario checker apply this one rule)."""
+    return 1e-9 * float(size) + 1e-12
+
+
 def _as_float(name: str, value: Any) -> float:
     try:
         arr = np.asarray(value, dtype=float)

@@ -16,6 +16,7 @@ import numpy as np
 
 from . import schema as S
 from ..errors import ModelError
+from ..validation import coincide_tolerance
 from .errors import Invalid
 from .types import TimeFunctionSpec
 from .geometry import element_count, first_node, initial_node_positions, reference_length
@@ -193,7 +194,7 @@ class Checker:
         if pa is None or pb is None:
             return
         d = float(np.linalg.norm(pa - pb))
-        if d <= 1e-9 * max(float(np.max(np.abs(pa))), float(np.max(np.abs(pb)))) + 1e-12:
+        if d <= coincide_tolerance(max(float(np.max(np.abs(pa))), float(np.max(np.abs(pb))))):
             raise Invalid(path, f"its ends a and b coincide at the initial state ({pa[0]:g}, {pa[1]:g}) m: at zero "
                           "length the spring's direction (the gradient of its length) is undefined",
                           "two points that start apart")
@@ -413,7 +414,7 @@ class Checker:
         if at is None or centre is None:
             return  # the build checks it
         d = float(np.linalg.norm(at - centre))
-        if d > 1e-9 * max(float(np.max(np.abs(at))), float(np.max(np.abs(centre)))) + 1e-12:
+        if d > coincide_tolerance(max(float(np.max(np.abs(at))), float(np.max(np.abs(centre))))):
             raise Invalid(path + ("local",), f'missing: body "{j.body}" starts {d:.4g} m from the point the joint '
                           f"holds ({at[0]:g}, {at[1]:g}) m, and without local it would be welded on through an "
                           "invisible rigid arm", "local = [x, y], the body point at the joint in the body frame, "
