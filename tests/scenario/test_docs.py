@@ -95,6 +95,8 @@ def test_defaults_are_written_once():
         assert default(function, "cutoff") == cutoff
     assert default(catenary.run_pantograph_catenary, "solver") == DEFAULT_SOLVER
     assert default(Model.build, "tolerance") == default(assemble_state, "tolerance")
+    from ancf_jax.element.laws import StrainRateDamped
+    assert schema.StrainRateDampedLawSpec.model_fields["rest"].default == default(StrainRateDamped.__init__, "rest")
     for name in ("xtol", "ftol", "gtol", "learning_rate"):
         assert default(fitting.fit, name) == default(fitting.fit_batch, name) == getattr(fitting, name.upper())
     from ancf_jax.fatigue.analysis import FatigueSettings
