@@ -81,3 +81,7 @@ def test_to_exudyn_matches_ancf_jax(exudyn_process):
 
 def test_from_exudyn_sliding_joint_and_curved_cables(exudyn_process):
     run_case(exudyn_process, "from_exudyn_sliding_and_curved")
+
+
+def test_index2_matches_exudyn(exudyn_process):
+    run_case(exudyn_process, "index2_matches_exudyn")

@@ -1011,7 +1011,7 @@ def simulation_settings(*, t_end: float, h: float, n_steps: int, output_dt: floa
                         relative_tolerance: float = 1e-8, absolute_tolerance: float = 1e-10,
                         modified_newton: bool = True, max_iterations: int = 25, linear_solver: str = "EXUdense",
                         discontinuous_tolerance: float = 1e-12, discontinuous_iterations: int = 5,
-                        threads: int = 1, verbose: int = 0):
+                        threads: int = 1, verbose: int = 0, index: int = 3):
     """Exudyn ``SimulationSettings`` for the fixed-step index-3 generalized-α run that
     ancf_jax's ``simulate(..., solver_options=dict(rho_inf=ρ∞, velocity_projection=False))``
     takes: the same ρ∞ and step h [s] (``n_steps`` steps to ``t_end`` [s]), consistent
@@ -1024,9 +1024,17 @@ def simulation_settings(*, t_end: float, h: float, n_steps: int, output_dt: floa
     default); ``False`` is full Newton. ``discontinuous_tolerance``: a sliding joint
     that leaves its element by more than this during a step repeats the step on the
     next element (Exudyn's default, 1 m, keeps the extrapolated old element;
-    benchmarks/EXUDYN.md).
+    benchmarks/EXUDYN.md). ``index``: 3 (positions) or 2 (velocity-level constraints,
+    ``useIndex2Constraints``; ancf_jax's ``solver_options=dict(index=2)``), which
+    Exudyn has for its Newmark method only: index 2 needs ρ∞ = 1, and runs Exudyn's
+    Newmark with β = ¼, γ = ½ (the trapezoidal rule, generalized-α at ρ∞ = 1).
     """
     exu, _ = _exudyn()
+    if index not in (2, 3):
+        raise ModelError(f"index must be 2 or 3, got {index!r}")
+    if index == 2 and rho_inf != 1.0:
+        raise ModelError(f"index 2 needs rho_inf = 1 (Exudyn has velocity-level constraints for its Newmark "
+                         f"method, the trapezoidal rule, only), got rho_inf = {rho_inf!r}")
     if linear_solver not in LINEAR_SOLVERS:
         raise ModelError(f"linear_solver must be one of {LINEAR_SOLVERS}, got {linear_solver!r}")
     ss = exu.SimulationSettings()
@@ -1036,8 +1044,10 @@ def simulation_settings(*, t_end: float, h: float, n_steps: int, output_dt: floa
     ti.verboseMode = int(verbose)
     ti.adaptiveStep = False
     ti.generalizedAlpha.spectralRadius = float(rho_inf)
-    ti.generalizedAlpha.useIndex2Constraints = False
-    ti.generalizedAlpha.useNewmark = False
+    ti.generalizedAlpha.useIndex2Constraints = index == 2
+    ti.generalizedAlpha.useNewmark = index == 2
+    ti.generalizedAlpha.newmarkBeta = 0.25
+    ti.generalizedAlpha.newmarkGamma = 0.5
     ti.generalizedAlpha.computeInitialAccelerations = True
     nt = ti.newton
     nt.relativeTolerance = float(relative_tolerance)
