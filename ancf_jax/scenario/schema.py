@@ -663,7 +663,8 @@ class GeneralizedAlphaOptions(Table):
     velocity_projection: Optional[bool] = key(None, doc="project velocities onto the constraints "
                                               f"(default {_default(GeneralizedAlpha, 'velocity_projection')})")
     index: Optional[Literal[2, 3]] = key(None, doc="constraint level: 3 positions, 2 velocities (Exudyn's "
-                                                   "useIndex2Constraints) "
+                                                   "useIndex2Constraints; positions drift at O(h²): raise "
+                                                   "drift_tolerance) "
                                                    f"(default {GeneralizedAlpha().constraints.index})")
     linear_solver: Optional[Literal["auto", "bordered", "dense"]] = key(None, doc=LINEAR_SOLVER_DOC)
 
