@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from typing import Any
 
 import numpy as np
 
@@ -122,37 +121,17 @@ def ancf_system(model: str, n_elements: int, *, integration: int = 0, **override
 
 # ------------------------------------------------------------------ Exudyn side
 @dataclasses.dataclass
-class ExudynModel:
-    """An Exudyn system translated from an ancf_jax system (see module docstring).
+class ExudynModel(_interop.ExudynSystem):
+    """An Exudyn system translated from an ancf_jax system
+    (:class:`ancf_jax.interop.exudyn.ExudynSystem`) with what :func:`run` keeps.
 
     Attributes:
         name: model name ("M1", "M2", "H1" or free text).
-        system: the ancf_jax system it was translated from (for post-processing).
-        sc, mbs: Exudyn SystemContainer and MainSystem (assembled).
-        beam_nodes: Exudyn node numbers of every beam's nodes.
-        beam_elements: Exudyn object numbers of every beam's elements.
-        beam_reference: reference nodal coordinates of every beam, (n + 1, 4).
-        body_nodes, body_objects: Exudyn node/object numbers of the rigid bodies.
-        body_reference: reference poses (nb, 3).
-        sliders: Exudyn object numbers of the sliding joints (ancf_jax order).
-        sensors: sensor numbers by kind.
-        integration: ``useReducedOrderIntegration`` of every cable element.
         setup_time_s: wall time of the translation, Assemble and mass matrix.
+        used: whether it has been run (Exudyn sensors accumulate: one run each).
     """
 
-    name: str
-    system: Any
-    sc: Any
-    mbs: Any
-    beam_nodes: list
-    beam_elements: list
-    beam_reference: list
-    body_nodes: list
-    body_objects: list
-    body_reference: np.ndarray
-    sliders: list
-    sensors: dict
-    integration: list
+    name: str = ""
     setup_time_s: float = 0.0
     used: bool = False
 
@@ -175,10 +154,7 @@ def build_exudyn(system, state, *, name: str = "", integration: int | None = Non
     t_start = time.perf_counter()
     x = _interop.to_exudyn(system, state, integration=integration, sensors=True,
                            cancel_sliding=cancel_sliding_term)
-    return ExudynModel(name=name, system=system, sc=x.sc, mbs=x.mbs, beam_nodes=x.beam_nodes,
-                       beam_elements=x.beam_elements, beam_reference=x.beam_reference,
-                       body_nodes=x.body_nodes, body_objects=x.body_objects, body_reference=x.body_reference,
-                       sliders=x.sliders, sensors=x.sensors, integration=x.integration,
+    return ExudynModel(**{f.name: getattr(x, f.name) for f in dataclasses.fields(x)}, name=name,
                        setup_time_s=time.perf_counter() - t_start)
 
 
