@@ -759,7 +759,8 @@ def to_exudyn(model, state=None, *, integration: int | None = None, sensors: boo
         x0 = np.asarray(system.beam_nodes(q0, b), float)
         xv = np.asarray(system.beam_nodes(v0, b), float)
         sec = beam.section
-        nodes = [mbs.AddNode(eii.NodePoint2DSlope1(name=_exudyn_name(f"{bname}.node{i}"), referenceCoordinates=list(ref[i]),
+        nodes = [mbs.AddNode(eii.NodePoint2DSlope1(name=_exudyn_name(f"{bname}.node{i}"),
+                                                   referenceCoordinates=list(ref[i]),
                                                    initialCoordinates=list(x0[i] - ref[i]),
                                                    initialVelocities=list(xv[i])))
                  for i in range(n + 1)]
@@ -773,7 +774,8 @@ def to_exudyn(model, state=None, *, integration: int | None = None, sensors: boo
                 strainIsRelativeToReference=relative, **damping))
             if gravity_on(bname):
                 mbs.AddLoad(eii.LoadMassProportional(
-                    name=_exudyn_name(f"{bname}.gravity{i}"), markerNumber=mbs.AddMarker(eii.MarkerBodyMass(bodyNumber=e)),
+                    name=_exudyn_name(f"{bname}.gravity{i}"),
+                    markerNumber=mbs.AddMarker(eii.MarkerBodyMass(bodyNumber=e)),
                     loadVector=gravity))
             elements.append(e)
         beam_nodes.append(nodes)
@@ -790,7 +792,8 @@ def to_exudyn(model, state=None, *, integration: int | None = None, sensors: boo
         if k in point_masses:
             nd = mbs.AddNode(eii.NodePoint2D(name=_exudyn_name(f"{name}.node"), referenceCoordinates=list(poses[k, :2]),
                                              initialVelocities=list(vels[k, :2])))
-            ob = mbs.AddObject(eii.MassPoint2D(name=_exudyn_name(name), nodeNumber=nd, mass=float(system.bodies.mass[k])))
+            ob = mbs.AddObject(eii.MassPoint2D(name=_exudyn_name(name), nodeNumber=nd,
+                                               mass=float(system.bodies.mass[k])))
         else:
             nd = mbs.AddNode(eii.NodeRigidBody2D(name=_exudyn_name(f"{name}.node"), referenceCoordinates=list(poses[k]),
                                                  initialVelocities=list(vels[k])))
@@ -840,8 +843,8 @@ def to_exudyn(model, state=None, *, integration: int | None = None, sensors: boo
             return mbs.AddMarker(eii.MarkerNodePosition(nodeNumber=beam_nodes[pt.beam][node_index(pt)]))
         if isinstance(pt, P.BeamPoint):
             mesh = system.beams[pt.beam].mesh
-            k, x = (int(np.asarray(v)) if i == 0 else float(np.asarray(v))
-                    for i, v in enumerate(mesh.locate(float(np.asarray(pt.s)))))
+            k, x = mesh.locate(float(np.asarray(pt.s)))
+            k, x = int(k), float(x)
             return mbs.AddMarker(eii.MarkerBodyPosition(bodyNumber=beam_elements[pt.beam][k],
                                                         localPosition=[x, 0.0, 0.0]))
         if isinstance(pt, P.GroundPoint):
@@ -907,7 +910,8 @@ def to_exudyn(model, state=None, *, integration: int | None = None, sensors: boo
             s0 = float(q0[system.sliding_offset + c.sliding])
             k0 = int(np.clip(np.searchsorted(s_nodes, s0, side="right") - 1, 0, n - 1))
             cable_markers = [mbs.AddMarker(eii.MarkerBodyCable2DCoordinates(bodyNumber=e)) for e in beam_elements[b]]
-            data = mbs.AddNode(eii.NodeGenericData(name=_exudyn_name(f"{c.name}.data"), initialCoordinates=[float(k0), s0],
+            data = mbs.AddNode(eii.NodeGenericData(name=_exudyn_name(f"{c.name}.data"),
+                                                   initialCoordinates=[float(k0), s0],
                                                    numberOfDataCoordinates=2))
             made = [mbs.AddObject(eii.ObjectJointSliding2D(
                 name=_exudyn_name(c.name), markerNumbers=[position_marker(c.body_point, what), cable_markers[k0]],
@@ -931,7 +935,8 @@ def to_exudyn(model, state=None, *, integration: int | None = None, sensors: boo
             raise _not_translated(what, "a time function (Exudyn needs a Python user function)")
         if type(f) is PointForce:
             fv = np.asarray(f.force, float)
-            made = [mbs.AddLoad(eii.LoadForceVector(name=_exudyn_name(f.name), markerNumber=position_marker(f.point, what),
+            made = [mbs.AddLoad(eii.LoadForceVector(name=_exudyn_name(f.name),
+                                                    markerNumber=position_marker(f.point, what),
                                                     loadVector=[fv[0], fv[1], 0.0]))]
         elif type(f) is PointTorque:
             if f.body in point_masses:
@@ -970,7 +975,8 @@ def to_exudyn(model, state=None, *, integration: int | None = None, sensors: boo
                                  numberOfColumns=size)
         zero = exu.MatrixContainer()
         zero.SetWithSparseMatrix(np.zeros((0, 3)), numberOfRows=size, numberOfColumns=size)
-        mbs.AddObject(eii.ObjectGenericODE2(name=_exudyn_name(f"{system.beam_names[b]}.alpha"), nodeNumbers=beam_nodes[b],
+        mbs.AddObject(eii.ObjectGenericODE2(name=_exudyn_name(f"{system.beam_names[b]}.alpha"),
+                                            nodeNumbers=beam_nodes[b],
                                             massMatrix=zero, dampingMatrix=dmat))
     if cancel_sliding:
         for b in sorted(set(slider_beams)):
