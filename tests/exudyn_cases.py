@@ -636,9 +636,18 @@ def from_exudyn_sliding_and_curved():
     from ancf_jax.interop.exudyn import from_exudyn
     from ancf_jax.simulation import simulate
 
+    from ancf_jax.errors import ModelError
     mbs, _ = _curved_sliding_mechanism(cancel=False)
     model = from_exudyn(mbs)
     system, state = model.build()
+    refused, _ = _curved_sliding_mechanism(cancel=False)
+    refused.SetObjectParameter(refused.GetObjectNumber("slide"), "useClassicalFormulation", False)
+    try:
+        from_exudyn(refused)
+    except ModelError as err:
+        assert "'slide'" in str(err) and "classical formulation only" in str(err), str(err)
+    else:
+        raise AssertionError("the local formulation of the sliding joint was accepted")
     assert system.beams[1].formulation.metric == "parameter"
     assert float(system.beams[0].bending_law.rest) == 1.0
     res = simulate(system, state, t_end=0.3, dt=1e-3, output_dt=0.01, progress=False, solver_options=_ANCF_OPTIONS)
