@@ -328,7 +328,7 @@ class Beam(eqx.Module):
         """Axial strain ε [-] at arc length s (the formulation's measure)."""
         e, x, l, k = self.element_at(nodes, s)
         e_ref = jnp.concatenate([self.mesh.reference_nodes[k], self.mesh.reference_nodes[k + 1]])
-        return _axial_strain(e, e_ref, x, l, self.formulation.axial_strain)
+        return _axial_strain(e, e_ref, x, l, self.formulation.axial_strain, self.formulation.metric)
 
     def axial_force_with_rate(self, nodes, velocities, s):
         """Axial force N = W'(ε) + N_d(ε, ε̇) [N] at arc length s: the elastic part of the
@@ -363,8 +363,9 @@ class Beam(eqx.Module):
     def elastic_axial_force(self, e, e_ref, x, l):
         """Elastic axial force N = W'(ε) [N] of the axial law (EA·ε without one)."""
         if self.axial_law is None:
-            return _axial_force(e, e_ref, x, l, self.section.axial_stiffness, self.formulation.axial_strain)
-        eps = _axial_strain(e, e_ref, x, l, self.formulation.axial_strain)
+            return _axial_force(e, e_ref, x, l, self.section.axial_stiffness, self.formulation.axial_strain,
+                                self.formulation.metric)
+        eps = _axial_strain(e, e_ref, x, l, self.formulation.axial_strain, self.formulation.metric)
         return jax.grad(self.axial_law.energy)(eps, self.section.axial_stiffness)
 
     @eqx.filter_jit

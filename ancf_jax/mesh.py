@@ -209,6 +209,29 @@ def through_points(points, slopes, *, n_max=None) -> BeamMesh:
     return _finish(np.array(lengths), nodes, n_max)
 
 
+def from_nodes(nodes, element_lengths, *, n_max=None) -> BeamMesh:
+    """A beam of given stress-free nodal coordinates and element lengths, taken as they
+    are (no fitting): element k joins nodes k and k + 1 and its parameter runs over
+    [0, l_k], as Exudyn's ``ObjectANCFCable2D`` with ``length`` l_k.
+
+    Args:
+        nodes: reference nodal coordinates (r_x, r_y, r'_x, r'_y) [m, -], shape (n + 1, 4), n >= 1.
+        element_lengths: l_k [m] > 0, shape (n,).
+        n_max: pad to this many element slots (default: no padding).
+    """
+    x = check_finite("nodes", nodes)
+    lengths = check_finite("element_lengths", element_lengths)
+    if x.ndim != 2 or x.shape[1] != 4 or x.shape[0] < 2:
+        raise ModelError(f"nodes must have shape (n+1, 4) with n >= 1, got {x.shape}")
+    if lengths.shape != (x.shape[0] - 1,):
+        raise ModelError(f"element_lengths must have shape ({x.shape[0] - 1},), got {lengths.shape}")
+    if np.any(lengths <= 0.0):
+        raise ModelError(f"element_lengths must be > 0 m, got {lengths.min()!r}")
+    if np.any(np.linalg.norm(x[:, 2:], axis=1) == 0.0):
+        raise ModelError("nodes must have non-zero slopes (columns 2 and 3)")
+    return _finish(lengths.astype(float), x.astype(float), n_max)
+
+
 def arc(center, radius, start_angle, end_angle, n_elements, *, n_max=None) -> BeamMesh:
     """A circular arc [m, rad], counter-clockwise if end_angle > start_angle."""
     c = check_vector("center", center, 2)

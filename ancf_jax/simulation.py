@@ -46,7 +46,7 @@ from .failures import Failure
 from .integrators.base import AbstractAdaptiveSolver, AbstractIntegrator, AbstractSolver, Carry
 from .integrators.diffrax_solvers import KINDS as DIFFRAX_KINDS
 from .integrators.diffrax_solvers import DiffraxSolver
-from .integrators.generalized_alpha import GeneralizedAlpha
+from .integrators.generalized_alpha import CONSTRAINT_LEVELS, GeneralizedAlpha
 from .integrators.explicit import RK4, ExplicitEuler
 from .linalg import LINEAR_SOLVERS
 from .newton import ModifiedNewton
@@ -76,7 +76,9 @@ def make_solver(name: str, **options):
     ``refresh_first`` configure its root finder (:data:`ROOT_FINDER_OPTIONS`);
     ``linear_solver`` (``"auto"``, ``"bordered"``, ``"dense"``,
     :data:`ancf_jax.linalg.LINEAR_SOLVERS`) its linear solver; the rest are fields of
-    the integrator. Defaults are those of the classes."""
+    the integrator, except ``index`` (2 or 3), which chooses generalized-α's constraint
+    level (:data:`~ancf_jax.integrators.generalized_alpha.CONSTRAINT_LEVELS`). Defaults
+    are those of the classes."""
     if name not in SOLVERS:
         raise ModelError(f"solver must be one of {', '.join(SOLVERS)}, got {name!r}")
     options = dict(options)
@@ -89,6 +91,12 @@ def make_solver(name: str, **options):
         rf = {ROOT_FINDER_OPTIONS[k]: options.pop(k) for k in list(options) if k in ROOT_FINDER_OPTIONS}
         if ls is not None:
             rf["linear_solver"] = ls
+        index = options.pop("index", None)
+        if index is not None:
+            if index not in CONSTRAINT_LEVELS:
+                raise ModelError(f"index (constraint level) of generalized-alpha must be one of "
+                                 f"{sorted(CONSTRAINT_LEVELS)}, got {index!r}")
+            options["constraints"] = CONSTRAINT_LEVELS[index]()
         return GeneralizedAlpha(root_finder=ModifiedNewton(**rf), **options)
     if ls is not None:
         options["linear_solver"] = ls

@@ -8,30 +8,8 @@ ancf_jax systems come from the model builders (:func:`ancf_jax.models.m1_model`,
 :func:`ancf_jax.models.m2.m2_initial`, :func:`h1_model` below) with the formulation
 that matches Exudyn's cable element (:func:`exudyn_formulation`).
 
-Mapping (ancf_jax → Exudyn 1.13):
-
-==============================  ===========================================================
-beam node (r, r')               ``NodePoint2DSlope1`` (reference = ancf_jax stress-free
-                                mesh, initial displacement = q₀ − reference)
-beam element                    ``ObjectANCFCable2D`` (length, ρA, EA = E·A, EI = E·I,
-                                ``useReducedOrderIntegration`` from the quadrature rules)
-Rayleigh α (β = 0)              ``ObjectGenericODE2`` over the beam's nodes with
-                                ``dampingMatrix`` = α·M, M = Exudyn's own consistent mass
-                                matrix of those coordinates (zero mass/stiffness matrices)
-gravity                         ``LoadMassProportional`` on ``MarkerBodyMass`` of every
-                                element and body
-rigid body (x, y, θ)            ``NodeRigidBody2D`` + ``ObjectRigidBody2D``
-Clamp (full), pin of a node     ``ObjectConnectorCoordinate`` per fixed nodal coordinate,
-                                to a ground coordinate, offset = prescribed − reference
-revolute (body/node points)     ``ObjectJointRevolute2D`` between position markers
-fixed joint node ↔ body         ``ObjectJointGeneric``, constrained axes x, y, rot z,
-                                between ``MarkerNodeRigid`` (slope frame of the node) and
-                                ``MarkerBodyRigid`` (body frame turned by the body-frame
-                                direction u₀ of the ancf_jax joint)
-sliding joint                   ``ObjectJointSliding2D`` (classical formulation) over all
-                                elements (``MarkerBodyCable2DCoordinates``), data node
-                                [element index, s₀]
-==============================  ===========================================================
+The translation is the package's :func:`ancf_jax.interop.exudyn.to_exudyn` (its
+docstring has the mapping); :func:`build_exudyn` wraps it for :func:`run`.
 
 Exudyn's cable uses the axial strain |r'| − 1 and the material curvature
 (r' × r'')/|r'|², with Gauss rules chosen by ``useReducedOrderIntegration``
@@ -42,19 +20,15 @@ side of any comparison must use :func:`exudyn_formulation` with the same mode.
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
-from typing import Any
 
 import numpy as np
 
 import ancf_jax  # noqa: F401  (float64)
-from ancf_jax import joints as J
 from ancf_jax import mesh as _mesh
-from ancf_jax import points as P
 from ancf_jax.element.quadrature import rule as _rule
-from ancf_jax.element.laws import LinearElastic, StrainRateDamped
-from ancf_jax.interop.exudyn import CABLE_RULES
+from ancf_jax.interop import exudyn as _interop
+from ancf_jax.interop.exudyn import CABLE_RULES, hermite as _hermite, integration_mode, sliding_term  # noqa: F401
 from ancf_jax.element.strain_energy import Formulation
 from ancf_jax.errors import ModelError
 from ancf_jax.model import Model, node
@@ -101,29 +75,11 @@ def require_exudyn():
 def exudyn_formulation(integration: int = 0) -> Formulation:
     """The ancf_jax formulation equal to Exudyn's ANCFCable2D with
     ``useReducedOrderIntegration=integration``: |r'| − 1, material curvature and
-    Exudyn's Gauss rules (:data:`EXUDYN_RULES`)."""
+    Exudyn's Gauss rules (:data:`EXUDYN_RULES`); the package's
+    :func:`ancf_jax.interop.exudyn.cable_formulation`."""
     if integration not in EXUDYN_RULES:
         raise ModelError(f"integration must be one of {sorted(EXUDYN_RULES)}, got {integration!r}")
-    ax, be = EXUDYN_RULES[integration]
-    return Formulation(axial_strain="engineering", curvature="material",
-                       axial_quadrature=ax, bending_quadrature=be)
-
-
-def integration_mode(formulation: Formulation) -> int:
-    """Exudyn's ``useReducedOrderIntegration`` equal to an ancf_jax formulation.
-
-    Raises:
-        ModelError: the formulation has no Exudyn equivalent.
-    """
-    if formulation.axial_strain != "engineering" or formulation.curvature != "material":
-        raise ModelError("Exudyn's ANCFCable2D uses axial_strain='engineering' and "
-                         f"curvature='material'; got {formulation.axial_strain!r}, "
-                         f"{formulation.curvature!r} (use exudyn_formulation())")
-    for mode, (ax, be) in EXUDYN_RULES.items():
-        if tuple(formulation.axial_quadrature) == ax and tuple(formulation.bending_quadrature) == be:
-            return mode
-    raise ModelError(f"quadrature {formulation.axial_quadrature}/{formulation.bending_quadrature} "
-                     f"is none of Exudyn's rules {EXUDYN_RULES}")
+    return _interop.cable_formulation(integration)
 
 
 def h1_model(n_elements: int | None = None, *, formulation: Formulation | None = None,
@@ -165,345 +121,40 @@ def ancf_system(model: str, n_elements: int, *, integration: int = 0, **override
 
 # ------------------------------------------------------------------ Exudyn side
 @dataclasses.dataclass
-class ExudynModel:
-    """An Exudyn system translated from an ancf_jax system (see module docstring).
+class ExudynModel(_interop.ExudynSystem):
+    """An Exudyn system translated from an ancf_jax system
+    (:class:`ancf_jax.interop.exudyn.ExudynSystem`) with what :func:`run` keeps.
 
     Attributes:
         name: model name ("M1", "M2", "H1" or free text).
-        system: the ancf_jax system it was translated from (for post-processing).
-        sc, mbs: Exudyn SystemContainer and MainSystem (assembled).
-        beam_nodes: Exudyn node numbers of every beam's nodes.
-        beam_elements: Exudyn object numbers of every beam's elements.
-        beam_reference: reference nodal coordinates of every beam, (n + 1, 4).
-        body_nodes, body_objects: Exudyn node/object numbers of the rigid bodies.
-        body_reference: reference poses (nb, 3).
-        sliders: Exudyn object numbers of the sliding joints (ancf_jax order).
-        sensors: sensor numbers by kind.
-        integration: ``useReducedOrderIntegration`` of every cable element.
         setup_time_s: wall time of the translation, Assemble and mass matrix.
+        used: whether it has been run (Exudyn sensors accumulate: one run each).
     """
 
-    name: str
-    system: Any
-    sc: Any
-    mbs: Any
-    beam_nodes: list
-    beam_elements: list
-    beam_reference: list
-    body_nodes: list
-    body_objects: list
-    body_reference: np.ndarray
-    sliders: list
-    sensors: dict
-    integration: list
+    name: str = ""
     setup_time_s: float = 0.0
     used: bool = False
 
 
-def _straight_unit_reference(ref: np.ndarray, n: int, name: str) -> None:
-    """Exudyn's cable measures strain from a straight, unit-slope state; check that the
-    ancf_jax stress-free reference is such a state (else the energies differ)."""
-    t = ref[: n + 1, 2:]
-    if np.max(np.abs(np.linalg.norm(t, axis=1) - 1.0)) > 1e-12 or np.max(np.abs(t - t[0])) > 1e-12:
-        raise ModelError(f"beam {name!r}: Exudyn's ANCFCable2D needs a straight reference with "
-                         "unit slopes (strain is measured from |r'| = 1, curvature 0)")
-    d = ref[1: n + 1, :2] - ref[:n, :2]
-    if np.max(np.abs(d[:, 0] * t[0, 1] - d[:, 1] * t[0, 0])) > 1e-12:
-        raise ModelError(f"beam {name!r}: reference nodes are not on a straight line")
-
-
-def _mass_matrix(mbs) -> np.ndarray:
-    """Exudyn's own system mass matrix (ODE2 coordinates), computed without a run."""
-    ss = exu.SimulationSettings()
-    ss.staticSolver.verboseMode = 0
-    ss.solution.file.write = False
-    ss.solution.sensors.active = False
-    solver = exu.MainSolverStatic()
-    solver.InitializeSolver(mbs, ss)
-    solver.ComputeMassMatrix(mbs)
-    return np.array(solver.GetSystemMassMatrix())
-
-
-def sliding_term(ds: float, slope_shape: np.ndarray, force) -> np.ndarray:
-    """The extra generalized force in Exudyn 1.13's ``ObjectJointSliding2D``
-    (classical formulation), on the 8 coordinates of the current cable element.
-
-    Exudyn adds C_qᵀ z to the equations of motion for *all* algebraic coordinates z of
-    a constraint (``CSystem::ComputeODE2ProjectedReactionForces``). The sliding joint's
-    third algebraic coordinate is not a multiplier but the sliding increment Δs of the
-    step, and its equation row is λ·r'(s) = 0, whose ODE2 Jacobian is λᵀS'(s). So the
-    cable equations carry the extra term Δs S'(s)ᵀλ on their left-hand side (Δs the
-    increment since the start of the step, λ the joint force). It vanishes at rest and
-    is O(h) in the step: a first-order error of Exudyn's joint, not of the model.
-
-    Args:
-        ds: sliding increment Δs [m]; slope_shape: S'(s) (4,) in Exudyn's order;
-        force: (λx, λy) [N].
-    Returns:
-        (8,) term on [r0x, r0y, r0'x, r0'y, r1x, r1y, r1'x, r1'y].
-    """
-    out = np.zeros(8)
-    out[0::2] = ds * slope_shape * force[0]
-    out[1::2] = ds * slope_shape * force[1]
-    return out
-
-
-def _sliding_compensation(joints, lengths, size):
-    """forceUserFunction of an ObjectGenericODE2 over all nodes of a beam: +Δs S'ᵀλ on
-    the right-hand side for each sliding joint, cancelling :func:`sliding_term`."""
-    cache = {}
-
-    def force(mbs, t, item, q, q_t):
-        sd = mbs.systemData
-        if not cache:
-            for j in joints:
-                data_node = mbs.GetObjectParameter(j, "nodeNumber")
-                cache[j] = (np.asarray(sd.GetObjectLTGAE(j), int), np.asarray(sd.GetNodeLTGData(data_node), int),
-                            np.asarray(mbs.GetObjectParameter(j, "slidingMarkerOffsets"), float))
-        z = sd.GetAECoordinates()
-        x = sd.GetDataCoordinates()
-        f = np.zeros(size)
-        for j in joints:
-            ae, data, offsets = cache[j]
-            k = int(round(x[data[0]]))
-            ds = z[ae[2]]
-            s_el = ds + x[data[1]] - offsets[k]
-            _, s1, _ = _hermite(np.array([s_el / lengths[k]]), lengths[k])
-            f[4 * k: 4 * k + 8] += sliding_term(ds, s1[0], (z[ae[0]], z[ae[1]]))
-        return f
-
-    return force
-
-
-def _rotation_angle(v) -> float:
-    return math.atan2(float(v[1]), float(v[0]))
-
-
 def build_exudyn(system, state, *, name: str = "", integration: int | None = None,
                  cancel_sliding_term: bool = False) -> ExudynModel:
-    """Translate an assembled ancf_jax system and its initial state into Exudyn.
-
-    Supports what M1, M2 and H1 use: beams with straight unit-slope references,
-    Rayleigh α (β = 0), rigid bodies, gravity, ``Clamp`` (mode "full"), ``Coincident``
-    (ground–node, ground–body, body–body, node–body), ``FixedJoint`` (beam node–body)
-    and ``SlidingJoint``. Anything else raises :class:`NotImplementedError`.
+    """Translate an assembled ancf_jax system and its initial state into Exudyn with
+    the package's :func:`ancf_jax.interop.exudyn.to_exudyn` (sensors on), wrapped for
+    :func:`run`.
 
     Args:
         integration: override the cable's ``useReducedOrderIntegration`` (default: the
             mode equal to each beam's formulation; a formulation without an Exudyn
             equivalent raises :class:`ModelError`).
-        cancel_sliding_term: add, per sliding joint, a generalized force that cancels
-            the extra term Exudyn 1.13's ``ObjectJointSliding2D`` puts into the cable
-            equations (see :func:`sliding_term`); only for cross-checks (it is a Python
-            user function called at every residual evaluation).
+        cancel_sliding_term: cancel the extra term Exudyn 1.13's ``ObjectJointSliding2D``
+            puts into the cable equations (:func:`sliding_term`); only for cross-checks
+            (a Python user function called at every residual evaluation).
     """
     require_exudyn()
     t_start = time.perf_counter()
-    if system.forces:
-        raise NotImplementedError("force elements are not translated to Exudyn")
-    q0 = np.asarray(state.q, float)
-    v0 = np.asarray(state.v, float)
-    g = np.asarray(system.gravity, float)
-    sc = exu.SystemContainer()
-    mbs = sc.AddSystem()
-    ground_node = mbs.AddNode(eii.NodePointGround(referenceCoordinates=[0.0, 0.0, 0.0]))
-    ground_coord = mbs.AddMarker(eii.MarkerNodeCoordinate(nodeNumber=ground_node, coordinate=0))
-    ground_obj = mbs.AddObject(eii.ObjectGround(referencePosition=[0.0, 0.0, 0.0]))
-    gravity = [float(g[0]), float(g[1]), 0.0]
-
-    # ---- beams
-    beam_nodes, beam_elements, beam_reference, modes = [], [], [], []
-    for b, beam in enumerate(system.beams):
-        bname = system.beam_names[b] if system.beam_names else str(b)
-        n = int(beam.mesh.n_elements)
-        if n != beam.mesh.n_max:
-            raise NotImplementedError("padded beams are not translated to Exudyn")
-        if float(beam.beta) != 0.0:
-            raise NotImplementedError("stiffness-proportional damping (beta) is not translated")
-        mode = integration_mode(beam.formulation) if integration is None else int(integration)
-        ref = np.asarray(beam.mesh.reference_nodes, float)
-        _straight_unit_reference(ref, n, bname)
-        x0 = np.asarray(system.beam_nodes(q0, b), float)
-        xv = np.asarray(system.beam_nodes(v0, b), float)
-        sec = beam.section
-        ea = float(sec.youngs_modulus) * float(sec.area)
-        ei = float(sec.youngs_modulus) * float(sec.second_moment)
-        rho_a = float(sec.mass_per_length)
-        lengths = np.asarray(beam.mesh.element_lengths, float)
-        damping = {}
-        for key, law in (("axialDamping", beam.axial_law), ("bendingDamping", beam.bending_law)):
-            if isinstance(law, StrainRateDamped):
-                damping[key] = float(law.damping)
-            elif law is not None and not isinstance(law, LinearElastic):
-                raise NotImplementedError(f"material law {type(law).__name__} is not translated to Exudyn")
-        nodes = [mbs.AddNode(eii.NodePoint2DSlope1(referenceCoordinates=list(ref[i]),
-                                                   initialCoordinates=list(x0[i] - ref[i]),
-                                                   initialVelocities=list(xv[i])))
-                 for i in range(n + 1)]
-        elements = []
-        for i in range(n):
-            e = mbs.AddObject(eii.ObjectANCFCable2D(
-                nodeNumbers=[nodes[i], nodes[i + 1]], length=float(lengths[i]), massPerLength=rho_a,
-                axialStiffness=ea, bendingStiffness=ei, useReducedOrderIntegration=mode, **damping))
-            mbs.AddLoad(eii.LoadMassProportional(
-                markerNumber=mbs.AddMarker(eii.MarkerBodyMass(bodyNumber=e)), loadVector=gravity))
-            elements.append(e)
-        beam_nodes.append(nodes)
-        beam_elements.append(elements)
-        beam_reference.append(ref)
-        modes.append(mode)
-
-    # ---- rigid bodies
-    body_nodes, body_objects = [], []
-    poses = np.array([np.asarray(system.body_pose(q0, k)) for k in range(system.n_bodies)]).reshape(-1, 3)
-    vels = np.array([np.asarray(system.body_pose(v0, k)) for k in range(system.n_bodies)]).reshape(-1, 3)
-    for k in range(system.n_bodies):
-        nd = mbs.AddNode(eii.NodeRigidBody2D(referenceCoordinates=list(poses[k]),
-                                             initialVelocities=list(vels[k])))
-        ob = mbs.AddObject(eii.ObjectRigidBody2D(mass=float(system.bodies.mass[k]),
-                                                 inertia=float(system.bodies.inertia[k]), nodeNumber=nd))
-        mbs.AddLoad(eii.LoadMassProportional(
-            markerNumber=mbs.AddMarker(eii.MarkerBodyMass(bodyNumber=ob)), loadVector=gravity))
-        body_nodes.append(nd)
-        body_objects.append(ob)
-
-    # ---- joints
-    def fix_coordinate(b, i, c, value):
-        """Nodal coordinate c of node i of beam b held at ``value`` (total coordinate)."""
-        m = mbs.AddMarker(eii.MarkerNodeCoordinate(nodeNumber=beam_nodes[b][i], coordinate=c))
-        mbs.AddObject(eii.ObjectConnectorCoordinate(
-            markerNumbers=[ground_coord, m], offset=float(value - beam_reference[b][i, c])))
-
-    def node_index(pt):
-        n = int(system.beams[pt.beam].mesh.n_elements)
-        i = int(np.asarray(pt.node))
-        return i if i >= 0 else n + 1 + i
-
-    def position_marker(pt):
-        if isinstance(pt, P.BodyPoint):
-            return mbs.AddMarker(eii.MarkerBodyPosition(
-                bodyNumber=body_objects[pt.body], localPosition=[*map(float, np.asarray(pt.local)), 0.0]))
-        if isinstance(pt, P.BeamNode):
-            return mbs.AddMarker(eii.MarkerNodePosition(nodeNumber=beam_nodes[pt.beam][node_index(pt)]))
-        if isinstance(pt, P.GroundPoint):
-            loc = np.asarray(pt.location, float)
-            return mbs.AddMarker(eii.MarkerBodyPosition(bodyNumber=ground_obj,
-                                                        localPosition=[loc[0], loc[1], 0.0]))
-        raise NotImplementedError(f"point type {type(pt).__name__} is not translated to Exudyn")
-
-    sliders = []
-    for c in system.constraints:
-        if isinstance(c, J.Clamp):
-            if c.mode == "direction":
-                raise NotImplementedError("clamp mode 'direction' is not translated to Exudyn")
-            b, i = c.node.beam, node_index(c.node)
-            target = np.concatenate([np.asarray(c.location, float), np.asarray(c.slope, float)])
-            for k in ((0, 1, 2, 3) if c.mode == "full" else (0, 1, 3)):  # "exudyn": x, y, r'_y
-                fix_coordinate(b, i, k, target[k])
-        elif isinstance(c, J.Coincident):
-            a, bb = c.a, c.b
-            if isinstance(bb, P.GroundPoint) and isinstance(a, P.BeamNode):
-                a, bb = bb, a
-            if isinstance(a, P.GroundPoint) and isinstance(bb, P.BeamNode):
-                loc = np.asarray(a.location, float)
-                for k in range(2):
-                    fix_coordinate(bb.beam, node_index(bb), k, loc[k])
-            else:
-                mbs.AddObject(eii.ObjectJointRevolute2D(markerNumbers=[position_marker(a), position_marker(bb)]))
-        elif isinstance(c, J.FixedJoint):
-            if not isinstance(c.point, P.BeamNode):
-                raise NotImplementedError("fixed joints other than beam node - body are not translated")
-            m_node = mbs.AddMarker(eii.MarkerNodeRigid(nodeNumber=beam_nodes[c.point.beam][node_index(c.point)]))
-            bp = c.body_point
-            m_body = mbs.AddMarker(eii.MarkerBodyRigid(
-                bodyNumber=body_objects[bp.body], localPosition=[*map(float, np.asarray(bp.local)), 0.0]))
-            phi = _rotation_angle(np.asarray(c.direction_local))  # slope direction in the body frame
-            cphi, sphi = math.cos(phi), math.sin(phi)
-            rot1 = [[cphi, -sphi, 0.0], [sphi, cphi, 0.0], [0.0, 0.0, 1.0]]
-            mbs.AddObject(eii.ObjectJointGeneric(markerNumbers=[m_node, m_body],
-                                                 constrainedAxes=[1, 1, 0, 0, 0, 1],
-                                                 rotationMarker1=rot1))
-        elif isinstance(c, J.SlidingJoint):
-            b = c.beam
-            n = int(system.beams[b].mesh.n_elements)
-            s_nodes = np.asarray(system.beams[b].mesh.node_arc_lengths, float)
-            s0 = float(q0[system.sliding_offset + c.sliding])
-            k0 = int(np.clip(np.searchsorted(s_nodes, s0, side="right") - 1, 0, n - 1))
-            cable_markers = [mbs.AddMarker(eii.MarkerBodyCable2DCoordinates(bodyNumber=e))
-                             for e in beam_elements[b]]
-            data = mbs.AddNode(eii.NodeGenericData(initialCoordinates=[float(k0), s0],
-                                                   numberOfDataCoordinates=2))
-            sliders.append(mbs.AddObject(eii.ObjectJointSliding2D(
-                markerNumbers=[position_marker(c.body_point), cable_markers[k0]],
-                slidingMarkerNumbers=cable_markers, slidingMarkerOffsets=list(s_nodes[:n]),
-                nodeNumber=data, useClassicalFormulation=True)))
-        elif isinstance(c, J.SlidingHold):
-            raise NotImplementedError("held sliding joints are not translated (release them first)")
-        else:
-            raise NotImplementedError(f"joint type {type(c).__name__} is not translated to Exudyn")
-
-    # ---- per beam one ObjectGenericODE2 on its nodes (no mass): the mass-proportional
-    # damping alpha * (Exudyn's own consistent beam mass matrix) and, optionally, the
-    # force cancelling the sliding joints' extra term
-    mbs.Assemble()
-    slid = {}
-    if cancel_sliding_term:
-        for j, c in zip(sliders, [c for c in system.constraints if isinstance(c, J.SlidingJoint)]):
-            slid.setdefault(c.beam, []).append(j)
-    extra = [b for b, beam in enumerate(system.beams) if float(beam.alpha) > 0.0 or b in slid]
-    mass = _mass_matrix(mbs) if extra else None
-    for b in extra:
-        ltg = np.concatenate([np.asarray(mbs.systemData.GetNodeLTGODE2(nd), int) for nd in beam_nodes[b]])
-        size = len(ltg)
-        mb = float(system.beams[b].alpha) * mass[np.ix_(ltg, ltg)]
-        rows, cols = np.nonzero(mb)
-        dmat = exu.MatrixContainer()
-        dmat.SetWithSparseMatrix(np.column_stack([rows, cols, mb[rows, cols]]), numberOfRows=size,
-                                 numberOfColumns=size)
-        zero = exu.MatrixContainer()
-        zero.SetWithSparseMatrix(np.zeros((0, 3)), numberOfRows=size, numberOfColumns=size)
-        kwargs = {}
-        if b in slid:
-            lengths = np.asarray(system.beams[b].mesh.element_lengths, float)
-            kwargs["forceUserFunction"] = _sliding_compensation(slid[b], lengths, size)
-
-            def no_jacobian(mbs_, t, item, q, q_t, f_ode2, f_ode2_t, _size=size):
-                # the compensating force depends on algebraic and data coordinates
-                # only: no ODE2 Jacobian (spares Exudyn's numerical differentiation)
-                jac = exu.MatrixContainer()
-                jac.SetWithSparseMatrix(np.zeros((0, 3)), numberOfRows=_size, numberOfColumns=_size)
-                return jac
-
-            kwargs["jacobianUserFunction"] = no_jacobian
-        mbs.AddObject(eii.ObjectGenericODE2(nodeNumbers=beam_nodes[b], massMatrix=zero,
-                                            dampingMatrix=dmat, **kwargs))
-
-    # ---- sensors (stored internally, no files)
-    def sensor(item):
-        return mbs.AddSensor(item)
-
-    ovt = exu.OutputVariableType
-    sensors = dict(
-        beam_q=[[sensor(eii.SensorNode(nodeNumber=nd, outputVariableType=ovt.Coordinates,
-                                       storeInternal=True, writeToFile=False)) for nd in nodes]
-                for nodes in beam_nodes],
-        beam_v=[[sensor(eii.SensorNode(nodeNumber=nd, outputVariableType=ovt.Coordinates_t,
-                                       storeInternal=True, writeToFile=False)) for nd in nodes]
-                for nodes in beam_nodes],
-        body_q=[sensor(eii.SensorNode(nodeNumber=nd, outputVariableType=ovt.Coordinates,
-                                      storeInternal=True, writeToFile=False)) for nd in body_nodes],
-        body_v=[sensor(eii.SensorNode(nodeNumber=nd, outputVariableType=ovt.Coordinates_t,
-                                      storeInternal=True, writeToFile=False)) for nd in body_nodes],
-        sliding_s=[sensor(eii.SensorObject(objectNumber=j, outputVariableType=ovt.SlidingCoordinate,
-                                           storeInternal=True, writeToFile=False)) for j in sliders],
-        sliding_p=[sensor(eii.SensorObject(objectNumber=j, outputVariableType=ovt.Position,
-                                           storeInternal=True, writeToFile=False)) for j in sliders],
-    )
-    mbs.Assemble()
-    return ExudynModel(name=name, system=system, sc=sc, mbs=mbs, beam_nodes=beam_nodes,
-                       beam_elements=beam_elements, beam_reference=beam_reference,
-                       body_nodes=body_nodes, body_objects=body_objects, body_reference=poses,
-                       sliders=sliders, sensors=sensors, integration=modes,
+    x = _interop.to_exudyn(system, state, integration=integration, sensors=True,
+                           cancel_sliding=cancel_sliding_term)
+    return ExudynModel(**{f.name: getattr(x, f.name) for f in dataclasses.fields(x)}, name=name,
                        setup_time_s=time.perf_counter() - t_start)
 
 
@@ -572,19 +223,6 @@ def ancf_histories(results) -> Histories:
 def _element_rules(mode: int):
     (ka, na), (kb, nb) = EXUDYN_RULES[mode]
     return _rule(ka, na), _rule(kb, nb)
-
-
-def _hermite(xi, length):
-    """Cubic Hermite shape functions and derivatives at ξ ∈ [0, 1] (Exudyn's order:
-    node-0 position, node-0 slope, node-1 position, node-1 slope), each (P, 4)."""
-    xi = np.asarray(xi, float)
-    s = np.stack([1 - 3 * xi**2 + 2 * xi**3, length * (xi - 2 * xi**2 + xi**3),
-                  3 * xi**2 - 2 * xi**3, length * (-xi**2 + xi**3)], axis=-1)
-    s1 = np.stack([(-6 * xi + 6 * xi**2) / length, 1 - 4 * xi + 3 * xi**2,
-                   (6 * xi - 6 * xi**2) / length, -2 * xi + 3 * xi**2], axis=-1)
-    s2 = np.stack([(-6 + 12 * xi) / length**2, (-4 + 6 * xi) / length,
-                   (6 - 12 * xi) / length**2, (-2 + 6 * xi) / length], axis=-1)
-    return s, s1, s2
 
 
 def _map(shape, e):
@@ -682,50 +320,14 @@ class ExudynRun:
     settings: dict
 
 
-LINEAR_SOLVERS = ("EXUdense", "EigenSparse", "EigenDense")
+LINEAR_SOLVERS = _interop.LINEAR_SOLVERS
 
 
-def simulation_settings(*, t_end: float, h: float, n_steps: int, output_dt: float,
-                        rho_inf: float = 0.9, relative_tolerance: float = 1e-8,
-                        absolute_tolerance: float = 1e-10, modified_newton: bool = True,
-                        max_iterations: int = 25, linear_solver: str = "EXUdense",
-                        discontinuous_tolerance: float = 1e-12,
-                        discontinuous_iterations: int = 5, threads: int = 1, verbose: int = 0):
-    """Exudyn SimulationSettings for a fixed-step index-3 generalized-α run.
-
-    The step is never adapted (``adaptiveStep = False``: a failed Newton iteration is
-    an error, not a smaller step) and the initial accelerations are computed from the
-    equations of motion, as ancf_jax does. ``discontinuous_tolerance``: a sliding
-    joint that leaves its element by more than this during a step repeats the step
-    on the next element (Exudyn's default, 1 m, keeps the extrapolated old element).
-    """
+def simulation_settings(**kwargs):
+    """Exudyn SimulationSettings for a fixed-step index-3 generalized-α run
+    (:func:`ancf_jax.interop.exudyn.simulation_settings`, same arguments)."""
     require_exudyn()
-    if linear_solver not in LINEAR_SOLVERS:
-        raise ModelError(f"linear_solver must be one of {LINEAR_SOLVERS}, got {linear_solver!r}")
-    ss = exu.SimulationSettings()
-    ti = ss.timeIntegration
-    ti.endTime = float(t_end)
-    ti.numberOfSteps = int(n_steps)
-    ti.verboseMode = int(verbose)
-    ti.adaptiveStep = False
-    ti.generalizedAlpha.spectralRadius = float(rho_inf)
-    ti.generalizedAlpha.useIndex2Constraints = False
-    ti.generalizedAlpha.useNewmark = False
-    ti.generalizedAlpha.computeInitialAccelerations = True
-    nt = ti.newton
-    nt.relativeTolerance = float(relative_tolerance)
-    nt.absoluteTolerance = float(absolute_tolerance)
-    nt.useModifiedNewton = bool(modified_newton)
-    nt.maxIterations = int(max_iterations)
-    ti.discontinuous.iterationTolerance = float(discontinuous_tolerance)
-    ti.discontinuous.maxIterations = int(discontinuous_iterations)
-    ti.discontinuous.ignoreMaxIterations = False
-    ss.linearSolver.solverType = getattr(exu.LinearSolverType, linear_solver)
-    ss.parallel.numberOfThreads = int(threads)
-    ss.solution.file.write = False
-    ss.solution.sensors.writePeriod = float(output_dt)
-    ss.show.computationTime = False
-    return ss
+    return _interop.simulation_settings(**kwargs)
 
 
 def run(model: ExudynModel, *, t_end: float, dt: float, output_dt: float | None = None,

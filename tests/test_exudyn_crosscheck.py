@@ -55,6 +55,10 @@ def test_strain_rate_damping_element_matches_exudyn(exudyn_process):
     run_case(exudyn_process, "strain_rate_damping_element")
 
 
+def test_curved_reference_element_matches_exudyn(exudyn_process):
+    run_case(exudyn_process, "curved_reference_element")
+
+
 def test_strain_rate_damping_dynamics_matches_exudyn(exudyn_process):
     run_case(exudyn_process, "strain_rate_damping_dynamics")
 
@@ -69,3 +73,15 @@ def test_from_exudyn_eigenvalues_match_exudyn(exudyn_process):
 
 def test_explicit_solvers_match_exudyn(exudyn_process):
     run_case(exudyn_process, "explicit_solvers_match_exudyn")
+
+
+def test_to_exudyn_matches_ancf_jax(exudyn_process):
+    run_case(exudyn_process, "to_exudyn_matches_ancf_jax")
+
+
+def test_from_exudyn_sliding_joint_and_curved_cables(exudyn_process):
+    run_case(exudyn_process, "from_exudyn_sliding_and_curved")
+
+
+def test_index2_matches_exudyn(exudyn_process):
+    run_case(exudyn_process, "index2_matches_exudyn")

@@ -239,7 +239,7 @@ geometry = { type = "straight", length = 1.0 }
 elements = 2
 section = { EA = 1e8, EI = 100.0, mass_per_length = 0.1 }
 gravity = false
-axial_law = { type = "strain_rate_damped", damping = 2.0 }
+axial_law = { type = "strain_rate_damped", damping = 2.0, rest = 0.001 }
 bending_law = { type = "tabulated", table = [[-1.0, -100.0], [0.0, 0.0], [1.0, 100.0]] }
 [bodies.bob]
 mass = 0.3
@@ -284,6 +284,7 @@ def test_scenario_with_the_exudyn_items(tmp_path):
     assert isinstance(system.forces[0], BeamMassLoad)
     beam = system.beams[0]
     assert isinstance(beam.axial_law, laws.StrainRateDamped) and float(beam.axial_law.damping) == 2.0
+    assert float(beam.axial_law.rest) == 0.001
     assert isinstance(beam.bending_law, laws.Tabulated) and beam.has_rate_law
     phi = np.asarray(system.constraint(state.q, 2.0))
     assert phi[5] == pytest.approx(-0.02, rel=1e-15)  # node 1 starts at y = 0, f(2) = 0.02
@@ -417,3 +418,35 @@ def test_rate_law_newton_matrix_is_the_derivative_of_the_forces():
     fd = np.stack([(np.asarray(force(e + h * d, ed + c_v * h * d)) - np.asarray(force(e - h * d, ed - c_v * h * d)))
                    / (2 * h) for d in np.eye(8)], axis=1)
     np.testing.assert_allclose(k, fd, rtol=0, atol=1e-7 * np.abs(k).max())
+
+
+# ----------------------------------------------------------------------------- 6. metric, meshes of given nodes
+def test_parameter_metric_is_the_arc_length_metric_on_straight_unit_references():
+    """``metric="parameter"`` (Exudyn's strainIsRelativeToReference = 1) measures strains
+    per unit element parameter; on a straight reference with unit slopes that is the
+    arc length, so both metrics give the same elastic force (to round-off); on a curved
+    reference with non-unit slopes they differ (the Exudyn cross-check
+    ``test_curved_reference_element_matches_exudyn`` pins the parameter one to Exudyn)."""
+    straight = mesh.from_nodes(np.asarray(mesh.straight((0, 0), (1, 0), 1.0, 2).reference_nodes), [0.5, 0.5])
+    curved = mesh.from_nodes([[0, 0, 1.1, 0.2], [0.45, 0.1, 0.9, 0.4], [0.8, 0.4, 0.6, 0.9]], [0.47, 0.5])
+    force = eqx.filter_jit(lambda b, n: b.elastic_force(n))
+    for m, same in ((straight, True), (curved, False)):
+        beams = [Beam(m, Section.from_stiffness(EA_C, EI_C, 0.1), formulation=Formulation(
+            axial_strain="engineering", curvature="material", metric=metric)) for metric in ("arc_length", "parameter")]
+        nodes = _deformed(beams[0], 7)
+        f = [np.asarray(force(b, nodes)) for b in beams]
+        gap = np.max(np.abs(f[0] - f[1])) / np.max(np.abs(f[0]))
+        assert (gap < 1e-14) if same else (gap > 1e-3), gap
+    with pytest.raises(ModelError, match="metric must be one of"):
+        Formulation(metric="reference")
+
+
+@pytest.mark.parametrize("nodes, lengths, match", [
+    (np.zeros((3, 3)), [1.0, 1.0], r"nodes must have shape \(n\+1, 4\)"),
+    ([[0, 0, 1, 0], [1, 0, 1, 0]], [1.0, 1.0], r"element_lengths must have shape \(1,\)"),
+    ([[0, 0, 1, 0], [1, 0, 1, 0]], [0.0], "element_lengths must be > 0"),
+    ([[0, 0, 0, 0], [1, 0, 1, 0]], [1.0], "non-zero slopes"),
+])
+def test_mesh_from_nodes_rejects_bad_input(nodes, lengths, match):
+    with pytest.raises(ModelError, match=match):
+        mesh.from_nodes(nodes, lengths)

@@ -78,26 +78,39 @@ class LinearElastic(AbstractElasticLaw):
         return 0.5 * stiffness * strain**2
 
 
+#: default natural strain γ₀ of :class:`StrainRateDamped`: stress-free at the reference
+NO_REST = 0.0
+
+
 class StrainRateDamped(AbstractLaw):
-    """N = k γ + d γ̇ (Exudyn's ``axialDamping`` d_A [N·s] and ``bendingDamping`` d_K
-    [N·m²·s] of ``ObjectANCFCable2D``): linear elastic with the section's stiffness k,
-    plus strain-rate damping d (a dissipation).
+    """N = k (γ − γ₀) + d γ̇: Exudyn's cable law (``ObjectANCFCable2D``'s ``axialDamping``
+    d_A [N·s] and ``bendingDamping`` d_K [N·m²·s], ``referenceAxialStrain`` ε₀ and
+    ``referenceCurvature`` κ₀): linear elastic with the section's stiffness k about a
+    natural strain γ₀ (default 0), plus strain-rate damping d (a dissipation). The
+    energy W(γ) = ½ k ((γ − γ₀)² − γ₀²) keeps W(0) = 0.
 
     Attributes:
         damping: d [N·s] (axial) or [N·m²·s] (bending), >= 0.
+        rest: γ₀, the strain [-] or curvature change [1/m] at which the law is
+            stress-free (a pre-strained or pre-curved beam on a reference that is not).
     """
 
     damping: jnp.ndarray
+    rest: jnp.ndarray
 
-    def __init__(self, damping):
+    def __init__(self, damping, rest=NO_REST):
         self.damping = jnp.asarray(check_nonnegative("damping (strain-rate law)", damping, "N*s or N*m^2*s"), float)
+        r = np.asarray(rest, float)
+        if r.shape != () or not np.isfinite(r):
+            raise ModelError(f"rest (natural strain of the strain-rate law) must be a finite number, got {rest!r}")
+        self.rest = jnp.asarray(r)
 
     @property
     def has_rate(self) -> bool:
         return True
 
     def energy(self, strain, stiffness):
-        return 0.5 * stiffness * strain**2
+        return 0.5 * stiffness * ((strain - self.rest) ** 2 - self.rest**2)
 
     def rate_force(self, strain, rate, stiffness):
         return self.damping * rate

@@ -24,6 +24,18 @@ Bending measures (``curvature``):
   bending energy ½ EI r''·r'' (Berzeri & Shabana 2000). It is only rotation invariant
   for a straight reference configuration, so it is restricted to that case.
 
+Reference metric (``metric``), for references whose element parameter x is not their
+arc length (curved references: |r₀'| = g ≠ 1 between the nodes):
+
+* ``"arc_length"`` (default): strains per unit reference arc length, as above
+  (ε = |r'|/g − 1, energy integrated over g dx).
+* ``"parameter"``: strains per unit of the element parameter and integrated over dx,
+  ε = |r'| − g (engineering) or ½ (r'·r' − g²) (Green–Lagrange), curvature change
+  κ − κ₀ likewise weighted by dx: Exudyn's ANCFCable2D with
+  ``strainIsRelativeToReference = 1`` (its pre-curved cable).
+
+On a straight reference with unit slopes (g = 1) the two are identical.
+
 Quadrature. The axial and bending terms are integrated with separate rules. The
 default integrates the axial term with the 3-point Gauss–Lobatto rule and the bending
 term with 3-point Gauss. Full integration of the axial term (5-point Gauss, exact for
@@ -64,6 +76,7 @@ from .shape_functions import interpolate_at, slope, slope_derivative
 
 AXIAL_STRAINS = ("green_lagrange", "engineering")
 CURVATURES = ("exact", "material", "small_strain")
+METRICS = ("arc_length", "parameter")
 
 
 def cross2(a, b):
@@ -79,18 +92,25 @@ class Formulation(eqx.Module):
         curvature: ``"exact"`` (Eq. 16), ``"material"`` or ``"small_strain"`` (Eq. 17).
         axial_quadrature: (kind, points), kind ``"gauss"`` or ``"lobatto"``.
         bending_quadrature: (kind, points).
+        metric: ``"arc_length"`` (strains per unit reference arc length) or
+            ``"parameter"`` (per unit of the element parameter, Exudyn's
+            ``strainIsRelativeToReference = 1``); equal on straight unit-slope
+            references (module docstring).
     """
 
     axial_strain: str = eqx.field(static=True, default="green_lagrange")
     curvature: str = eqx.field(static=True, default="exact")
     axial_quadrature: tuple = eqx.field(static=True, default=("lobatto", 3))
     bending_quadrature: tuple = eqx.field(static=True, default=("gauss", 3))
+    metric: str = eqx.field(static=True, default="arc_length")
 
     def __check_init__(self):
         if self.axial_strain not in AXIAL_STRAINS:
             raise ModelError(f"axial_strain must be one of {AXIAL_STRAINS}, got {self.axial_strain!r}")
         if self.curvature not in CURVATURES:
             raise ModelError(f"curvature must be one of {CURVATURES}, got {self.curvature!r}")
+        if self.metric not in METRICS:
+            raise ModelError(f"metric must be one of {METRICS}, got {self.metric!r}")
         for name in ("axial_quadrature", "bending_quadrature"):
             q = getattr(self, name)
             if (not isinstance(q, tuple) or len(q) != 2 or q[0] not in RULES
@@ -101,7 +121,18 @@ class Formulation(eqx.Module):
                     f"(2..10 for lobatto), got {q!r}")
 
 
-def axial_strain(e, e_ref, x, length, measure="green_lagrange"):
+def _strain(r1r1, g2, measure, metric):
+    """Axial strain from r'·r' and g² = r₀'·r₀' (module docstring)."""
+    if metric == "parameter":
+        if measure == "green_lagrange":
+            return 0.5 * (r1r1 - g2)
+        return jnp.sqrt(r1r1) - jnp.sqrt(g2)
+    if measure == "green_lagrange":
+        return 0.5 * (r1r1 - g2) / g2
+    return jnp.sqrt(r1r1 / g2) - 1.0
+
+
+def axial_strain(e, e_ref, x, length, measure="green_lagrange", metric="arc_length"):
     """Axial strain ε at reference arc length x (dimensionless).
 
     Args:
@@ -110,12 +141,11 @@ def axial_strain(e, e_ref, x, length, measure="green_lagrange"):
         x: local reference arc length [m].
         length: element length l [m].
         measure: ``"green_lagrange"`` or ``"engineering"``.
+        metric: ``"arc_length"`` or ``"parameter"`` (:class:`Formulation`).
     """
     r1 = slope(e, x, length)
-    g2 = jnp.dot(slope(e_ref, x, length), slope(e_ref, x, length))
-    if measure == "green_lagrange":
-        return 0.5 * (jnp.dot(r1, r1) - g2) / g2
-    return jnp.sqrt(jnp.dot(r1, r1) / g2) - 1.0
+    r0 = slope(e_ref, x, length)
+    return _strain(jnp.dot(r1, r1), jnp.dot(r0, r0), measure, metric)
 
 
 def curvature(e, x, length, measure="exact"):
@@ -144,23 +174,27 @@ def _dot(a, b):
 
 
 def axial_strains(e, e_ref, length, formulation: Formulation = Formulation()):
-    """Axial strain ε at the axial quadrature points and the reference metric
-    g = |r₀'| there, each shape (p,) (the integrand of the axial term of Eq. 8)."""
+    """Axial strain ε at the axial quadrature points and the integration weight there
+    (the reference metric g = |r₀'|, or 1 with ``metric="parameter"``), each shape
+    (p,) (the integrand of the axial term of Eq. 8)."""
     xa, _ = rule(*formulation.axial_quadrature)
     r1 = interpolate_at(e, xa, length, 1)
     r1_ref = interpolate_at(e_ref, xa, length, 1)
     g2 = _dot(r1_ref, r1_ref)
-    if formulation.axial_strain == "green_lagrange":
-        eps = 0.5 * (_dot(r1, r1) - g2) / g2
-    else:
-        eps = jnp.sqrt(_dot(r1, r1) / g2) - 1.0
-    return eps, jnp.sqrt(g2)
+    eps = _strain(_dot(r1, r1), g2, formulation.axial_strain, formulation.metric)
+    return eps, _weight(g2, formulation)
+
+
+def _weight(g2, formulation):
+    """Integration weight of the energy density per dx: g (arc length) or 1 (parameter)."""
+    return jnp.ones_like(g2) if formulation.metric == "parameter" else jnp.sqrt(g2)
 
 
 def curvature_changes(e, e_ref, length, formulation: Formulation = Formulation()):
-    """Curvature change κ − κ₀ at the bending quadrature points and the reference
-    metric g = |r₀'| there, each shape (p,), for the ``"exact"`` and ``"material"``
-    measures (the integrand of the bending term of Eq. 8)."""
+    """Curvature change κ − κ₀ at the bending quadrature points and the integration
+    weight there (g = |r₀'|, or 1 with ``metric="parameter"``), each shape (p,), for
+    the ``"exact"`` and ``"material"`` measures (the integrand of the bending term of
+    Eq. 8)."""
     xb, _ = rule(*formulation.bending_quadrature)
     r1 = interpolate_at(e, xb, length, 1)
     r2 = interpolate_at(e, xb, length, 2)
@@ -171,7 +205,7 @@ def curvature_changes(e, e_ref, length, formulation: Formulation = Formulation()
     def kappa(a, b):
         return (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]) / _dot(a, a) ** power
 
-    return kappa(r1, r2) - kappa(r1_ref, r2_ref), jnp.sqrt(_dot(r1_ref, r1_ref))
+    return kappa(r1, r2) - kappa(r1_ref, r2_ref), _weight(_dot(r1_ref, r1_ref), formulation)
 
 
 def strain_energy(e, e_ref, length, axial_stiffness, bending_stiffness,

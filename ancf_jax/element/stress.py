@@ -47,7 +47,7 @@ def bending_moment(e, e_ref, x, length, bending_stiffness, measure="exact"):
     return bending_stiffness * k
 
 
-def axial_force(e, e_ref, x, length, axial_stiffness, measure="green_lagrange"):
+def axial_force(e, e_ref, x, length, axial_stiffness, measure="green_lagrange", metric="arc_length"):
     """Axial force N = EA·ε [N] at local x [m], tension positive.
 
     ε is the element's own axial strain measure (:func:`~.strain_energy.axial_strain`,
@@ -61,5 +61,6 @@ def axial_force(e, e_ref, x, length, axial_stiffness, measure="green_lagrange"):
         length: element length l [m].
         axial_stiffness: EA [N].
         measure: ``"green_lagrange"`` or ``"engineering"``.
+        metric: ``"arc_length"`` or ``"parameter"`` (the formulation's).
     """
-    return axial_stiffness * axial_strain(e, e_ref, x, length, measure)
+    return axial_stiffness * axial_strain(e, e_ref, x, length, measure, metric)

@@ -34,6 +34,19 @@ Positions satisfy Φ = 0 to the Newton tolerance at every step (index 3). With
 Φ_q v + Φ_t = 0 after the step in the mass metric (the beam-mass factors are constant,
 so this costs one small Schur complement).
 
+Constraint level (``constraints``): :class:`PositionLevel` (default, index 3) solves
+Φ(q_{n+1}, t_{n+1}) = 0 with the equations of motion; :class:`VelocityLevel` (index 2,
+Exudyn's ``useIndex2Constraints``) solves Φ̇ = Φ_q(q_{n+1}) v_{n+1} + Φ_t = 0 instead, so
+velocities satisfy the velocity constraints and positions drift off Φ = 0 at the
+method's order. At ρ∞ = 1 (α_m = α_f = ½, γ = ½, β = ¼) both are the trapezoidal rule.
+The index-2 row is scaled by 1/γ' so that its Newton-matrix block is Φ_q, as at index 3
+(the matrix and its solvers are shared); the term (Φ_q v)_q/γ' = O(h) of its exact
+derivative is left out, which keeps the converged solution and makes Newton contract
+at a rate O(h) instead of quadratically. Measured on a rigid pendulum at ρ∞ = 1
+(``tests/integrators/test_integrators.py``): second order in θ and in the drift |Φ|
+(4.8e-5 m at h = 4 ms to 7.4e-7 m at 0.5 ms over 1 s), above the loop's default
+``RunOptions.drift_tolerance`` (1e-6 m) at common steps, so index-2 runs raise it.
+
 Differentiable: the root finder's :meth:`~ancf_jax.newton.ModifiedNewton.root` wraps
 the Newton solve in :func:`jax.lax.custom_root`, so ``jax.grad`` and ``jax.jvp`` of a
 trajectory differentiate the converged equations (implicit function theorem) rather
@@ -43,7 +56,9 @@ steps of iterative refinement.
 
 from __future__ import annotations
 
+import abc
 import dataclasses
+from typing import ClassVar
 
 import equinox as eqx
 import jax
@@ -52,6 +67,42 @@ import jax.numpy as jnp
 from .. import dae
 from ..newton import ModifiedNewton
 from .base import AbstractIntegrator, Carry, StepInfo
+
+
+class AbstractConstraintLevel(eqx.Module):
+    """Which constraint equations a generalized-α step solves with the equations of
+    motion (module docstring)."""
+
+    index: eqx.AbstractClassVar[int]
+
+    @abc.abstractmethod
+    def residual(self, system, q, v, t, gamma_p):
+        """The constraint rows of the step residual at (q_{n+1}, v_{n+1}, t_{n+1}),
+        shape (m,), scaled so that their derivative by the position correction is Φ_q
+        (up to terms of order h); ``gamma_p`` = ∂v_{n+1}/∂q_{n+1} = γ/(h β) [1/s]."""
+
+
+class PositionLevel(AbstractConstraintLevel):
+    """Index 3: Φ(q_{n+1}, t_{n+1}) = 0 [m] (the default)."""
+
+    index: ClassVar[int] = 3
+
+    def residual(self, system, q, v, t, gamma_p):
+        return system.constraint(q, t)
+
+
+class VelocityLevel(AbstractConstraintLevel):
+    """Index 2: Φ̇(q_{n+1}, v_{n+1}, t_{n+1}) = Φ_q v + Φ_t = 0, scaled by 1/γ' [m]
+    (Exudyn's ``useIndex2Constraints``)."""
+
+    index: ClassVar[int] = 2
+
+    def residual(self, system, q, v, t, gamma_p):
+        return system.constraint_velocity(q, v, t) / gamma_p
+
+
+#: constraint levels by index, for flat options (``index = 2`` or ``3``)
+CONSTRAINT_LEVELS = {3: PositionLevel, 2: VelocityLevel}
 
 
 class GeneralizedAlpha(AbstractIntegrator):
@@ -66,6 +117,8 @@ class GeneralizedAlpha(AbstractIntegrator):
         refinement: iterative-refinement steps of the tangent solves (derivatives).
         implicit_diff: differentiate the converged step equations (implicit function
             theorem) instead of the Newton iterations.
+        constraints: the constraint level, :class:`PositionLevel` (index 3, default)
+            or :class:`VelocityLevel` (index 2).
     """
 
     rho_inf: float = eqx.field(static=True, default=0.9)
@@ -73,6 +126,7 @@ class GeneralizedAlpha(AbstractIntegrator):
     velocity_projection: bool = eqx.field(static=True, default=True)
     refinement: int = eqx.field(static=True, default=4)
     implicit_diff: bool = eqx.field(static=True, default=True)
+    constraints: AbstractConstraintLevel = PositionLevel()
 
     @property
     def name(self) -> str:
@@ -134,8 +188,9 @@ class GeneralizedAlpha(AbstractIntegrator):
             if system.reaction_forces:
                 r_q = r_q - system.reaction_force(q1, v1, t1, lam)
             if system.n_constraints:
-                phi, vjp = jax.vjp(lambda qq: system.constraint(qq, t1), q1)
+                _, vjp = jax.vjp(lambda qq: system.constraint(qq, t1), q1)
                 r_q = r_q + vjp(lam)[0]
+                phi = self.constraints.residual(system, q1, v1, t1, gamma_p)
             else:
                 phi = jnp.zeros((0,), q1.dtype)
             return dae.to_solver_order(system, r_q, phi)

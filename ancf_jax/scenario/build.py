@@ -99,7 +99,7 @@ def law_of(spec):
     if spec.type == "linear":
         return laws.LinearElastic()
     if spec.type == "strain_rate_damped":
-        return laws.StrainRateDamped(spec.damping)
+        return laws.StrainRateDamped(spec.damping, spec.rest)
     if spec.type == "bilinear":
         return laws.Bilinear(spec.tension, spec.compression)
     table = np.asarray(spec.table, float)
@@ -167,7 +167,7 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
             f = b.formulation
             formulation = Formulation(axial_strain=f.axial_strain, curvature=f.curvature,
                                       axial_quadrature=tuple(f.axial_quadrature),
-                                      bending_quadrature=tuple(f.bending_quadrature))
+                                      bending_quadrature=tuple(f.bending_quadrature), metric=f.metric)
             nodes, vel = initial_nodes(b, mesh, length)
             m.add_beam(name, mesh, section, alpha=b.alpha, beta=b.beta, formulation=formulation,
                        initial_nodes=nodes, initial_velocities=vel, gravity=b.gravity,

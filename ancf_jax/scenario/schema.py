@@ -17,7 +17,8 @@ from typing import Annotated, ClassVar, Literal, Optional, Union
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from ..element.strain_energy import AXIAL_STRAINS, CURVATURES, Formulation
+from ..element.laws import NO_REST
+from ..element.strain_energy import AXIAL_STRAINS, CURVATURES, METRICS, Formulation
 from ..fatigue.analysis import METHODS as FATIGUE_METHODS, FatigueSettings
 from ..fatigue.sn import CORRECTIONS, EUROCODE
 from ..fatigue.stress import LAYOUTS
@@ -138,6 +139,8 @@ class FormulationSpec(Table):
                                                                    "small_strain (Eq. 17, straight beams only)")
     axial_quadrature: Quadrature = key(Formulation.axial_quadrature, doc="[kind, points] of the axial term")
     bending_quadrature: Quadrature = key(Formulation.bending_quadrature, doc="[kind, points] of the bending term")
+    metric: Literal[METRICS] = key(Formulation.metric, doc="strains per unit reference arc length, or per unit "
+                                                          "element parameter (Exudyn's strainIsRelativeToReference)")
 
 
 class LinearLawSpec(Table):
@@ -147,11 +150,14 @@ class LinearLawSpec(Table):
 
 
 class StrainRateDampedLawSpec(Table):
-    """Linear elastic with strain-rate damping, N = EA ε + d ε̇ (Exudyn's axialDamping
-    and bendingDamping); the rate term is a dissipation."""
+    """Linear elastic with strain-rate damping, N = EA (ε − ε₀) + d ε̇ (Exudyn's axialDamping
+    and bendingDamping, referenceAxialStrain and referenceCurvature); the rate term is a
+    dissipation."""
 
     type: Literal["strain_rate_damped"] = key(doc="law type")
     damping: float = key(unit="N·s or N·m²·s", ge=0.0, allow_inf_nan=False, doc="d (d_A axial, d_K bending)")
+    rest: float = key(NO_REST, unit="- or 1/m", allow_inf_nan=False,
+                      doc="natural strain ε₀ or curvature change κ₀ where the law is stress-free")
 
 
 class BilinearLawSpec(Table):
@@ -656,6 +662,10 @@ class GeneralizedAlphaOptions(Table):
                                                   "for steps whose predictor is far off)")
     velocity_projection: Optional[bool] = key(None, doc="project velocities onto the constraints "
                                               f"(default {_default(GeneralizedAlpha, 'velocity_projection')})")
+    index: Optional[Literal[2, 3]] = key(None, doc="constraint level: 3 positions, 2 velocities (Exudyn's "
+                                                   "useIndex2Constraints; positions drift at O(h²): raise "
+                                                   "drift_tolerance) "
+                                                   f"(default {GeneralizedAlpha().constraints.index})")
     linear_solver: Optional[Literal["auto", "bordered", "dense"]] = key(None, doc=LINEAR_SOLVER_DOC)
 
 

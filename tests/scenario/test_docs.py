@@ -46,7 +46,7 @@ def test_solver_options_are_options_of_the_solvers():
         # fields of the integrator, of its root finder (generalized-α) and the linear solver
         known = set(classes[name].__dataclass_fields__) | {"linear_solver"}
         if name == "generalized-alpha":
-            known |= set(ROOT_FINDER_OPTIONS)
+            known |= set(ROOT_FINDER_OPTIONS) | {"index"}  # index: the constraint level (make_solver)
         assert set(options) <= known, (name, set(options) - known)
     assert set(ROOT_FINDER_OPTIONS.values()) <= set(ModifiedNewton.__dataclass_fields__)
 
@@ -59,6 +59,10 @@ def test_flat_solver_options_configure_the_composed_solver():
     assert ga.root_finder.contraction == 0.1 and isinstance(ga.linear_solver, DenseLUSolver)
     assert isinstance(make_solver("rk4", linear_solver="bordered").linear_solver, BorderedChainSolver)
     assert isinstance(make_solver("generalized-alpha").linear_solver, AutoSaddleSolver)
+    assert make_solver("generalized-alpha", index=2).constraints.index == 2
+    assert make_solver("generalized-alpha").constraints.index == 3
+    with pytest.raises(ModelError, match="index .constraint level. of generalized-alpha must be one of .2, 3."):
+        make_solver("generalized-alpha", index=1)
     with pytest.raises(ModelError, match="linear_solver must be one of auto, bordered, dense"):
         make_solver("rk4", linear_solver="sparse")
 
@@ -95,6 +99,8 @@ def test_defaults_are_written_once():
         assert default(function, "cutoff") == cutoff
     assert default(catenary.run_pantograph_catenary, "solver") == DEFAULT_SOLVER
     assert default(Model.build, "tolerance") == default(assemble_state, "tolerance")
+    from ancf_jax.element.laws import StrainRateDamped
+    assert schema.StrainRateDampedLawSpec.model_fields["rest"].default == default(StrainRateDamped.__init__, "rest")
     for name in ("xtol", "ftol", "gtol", "learning_rate"):
         assert default(fitting.fit, name) == default(fitting.fit_batch, name) == getattr(fitting, name.upper())
     from ancf_jax.fatigue.analysis import FatigueSettings
