@@ -58,7 +58,7 @@ import jax
 import jax.numpy as jnp
 import optimistix as optx
 
-from .forces import AbstractKinkedForce, AbstractLoad
+from .forces import AbstractKinkedForce, AbstractLoad, AbstractNodeCrossing
 from .functions import AbstractPath
 from .element.shape_functions import shape_functions, shape_functions_dx
 from .points import AbstractPoint, element_coordinates
@@ -142,13 +142,31 @@ def arc_length_under(system, beam: int, q, x):
 
 
 def _closest(system, beam: int, q, p):
-    """(s*, on the beam, element coordinates (4, 2), local arc length, element length)."""
+    """(s*, on the beam, element coordinates (4, 2), local arc length, element length,
+    s* before clamping to the element)."""
     e, length, s_k, u0 = _node_interval(system, beam, q, p[0])
     u = _closest_root(e, p, length, jax.lax.stop_gradient(u0))
     total = system.beams[beam].mesh.length
     on = (s_k + u >= 0.0) & (s_k + u <= total)
+    raw = s_k + u
     u = jnp.clip(u, 0.0, length)
-    return s_k + u, on, e, u, length
+    return s_k + u, on, e, u, length, raw
+
+
+def node_crossing_value(mesh, s):
+    """(−1)ᵏ f (1 − f) with ξ = k + f the global element coordinate of the reference arc
+    length s [m] (k the element holding s, f = (s − s_k)/l_k ∈ [0, 1); beyond the ends
+    the end elements extended, :meth:`~ancf_jax.mesh.BeamMesh.locate`), ξ clamped to
+    [−½, n + ½] (n active elements). Continuous in s, exactly zero at the nodes
+    (ξ = 0 … n, the ends included), of one sign within each element and alternating
+    from element to element: its zero crossings are the node crossings of a point
+    moving along the beam and, at ξ = 0 and n, its entry and exit. Constant beyond ½
+    element off the ends (no further crossings)."""
+    k, x = mesh.locate(s)
+    xi = jnp.clip(k + x / mesh.element_lengths[k], -0.5, mesh.n_elements + 0.5)
+    j = jnp.floor(xi)
+    f = xi - j
+    return jnp.where(jnp.mod(j, 2.0) == 0.0, 1.0, -1.0) * f * (1.0 - f)
 
 
 def closest_arc_length(system, beam: int, q, p):
@@ -171,6 +189,12 @@ class AbstractMovingLocation(eqx.Module):
         """(s [m], on_beam): the reference arc length of the loaded material point
         (clamped to [0, L]) and whether the load is on the beam."""
 
+    @abc.abstractmethod
+    def extended_arc_length(self, system, beam: int, q, t):
+        """s [m] of :meth:`locate` continued beyond the ends (s < 0 before the start,
+        s > L past the end, growing with the distance off the beam): continuous in t,
+        for the node-crossing values of :func:`node_crossing_value`."""
+
 
 class AtArcLength(AbstractMovingLocation):
     """The material point at reference arc length s = ``path(t)`` [m]."""
@@ -182,6 +206,10 @@ class AtArcLength(AbstractMovingLocation):
         length = system.beams[beam].mesh.length
         return jnp.clip(s, 0.0, length), (s >= 0.0) & (s <= length)
 
+    def extended_arc_length(self, system, beam: int, q, t):
+        """s = ``path(t)`` as it is."""
+        return self.path(t)
+
 
 class AtHorizontalPosition(AbstractMovingLocation):
     """The material point whose current horizontal coordinate is x = ``path(t)`` [m]
@@ -192,8 +220,20 @@ class AtHorizontalPosition(AbstractMovingLocation):
     def locate(self, system, beam: int, q, t):
         return arc_length_under(system, beam, q, self.path(t))
 
+    def extended_arc_length(self, system, beam: int, q, t):
+        """s under x on the beam; off it, the end's s minus (start end) or plus (far
+        end) the horizontal distance |x − x_end| [m] from the nearer end."""
+        x = self.path(t)
+        s, inside = arc_length_under(system, beam, q, x)
+        nodes = system.beam_nodes(q, beam)
+        mesh = system.beams[beam].mesh
+        x0, x1 = nodes[0, 0], nodes[mesh.n_elements, 0]
+        before = jnp.abs(x - x0) < jnp.abs(x - x1)
+        off = jnp.where(before, -jnp.abs(x - x0), jnp.abs(x - x1))
+        return jnp.where(inside, s, jnp.where(before, 0.0, mesh.length) + off)
 
-class MovingForce(AbstractLoad):
+
+class MovingForce(AbstractLoad, AbstractNodeCrossing):
     """A point force F·f(t) [N] (fixed direction) at a moving material point of beam
     ``beam`` (module docstring); zero while the point is off the beam.
 
@@ -225,8 +265,16 @@ class MovingForce(AbstractLoad):
         s, _ = self.location.locate(system, self.beam, q, t)
         return element_coordinates(system, self.beam, s)
 
+    def node_crossings(self, system, q, v, t):
+        """:func:`node_crossing_value` of the loaded point, shape (1,): zero at the
+        nodes, where the generalized force S(s)ᵀF is C¹ in time (the second
+        derivative of the shape functions jumps), and at the ends, where the force
+        enters or leaves the beam (a jump)."""
+        s = self.location.extended_arc_length(system, self.beam, q, t)
+        return jnp.reshape(node_crossing_value(system.beams[self.beam].mesh, s), (1,))
 
-class UnilateralContact(AbstractKinkedForce):
+
+class UnilateralContact(AbstractKinkedForce, AbstractNodeCrossing):
     """Penalty contact between ``point`` and beam ``beam`` at the closest point
     (module docstring).
 
@@ -255,7 +303,7 @@ class UnilateralContact(AbstractKinkedForce):
         """(g, on the beam): the gap g = σ n̂·(p − r(s*)) − g₀ [m] (negative:
         penetration) at the closest point, whether or not it is on the beam."""
         p = self.point.position(system, q)
-        _, on, e, u, length = _closest(system, self.beam, q, p)
+        _, on, e, u, length, _ = _closest(system, self.beam, q, p)
         r1 = shape_functions_dx(u, length) @ e
         n = jnp.stack([-r1[1], r1[0]]) / jnp.linalg.norm(r1)
         return self.side * jnp.dot(n, p - shape_functions(u, length) @ e) - self.offset, on
@@ -308,3 +356,13 @@ class UnilateralContact(AbstractKinkedForce):
         delta, _, rate, _ = self._state(system, q, v)
         return jnp.stack([delta, jnp.where(delta > 0.0, self.stiffness * delta + self.damping * rate,
                                            self.stiffness * delta)])
+
+    def node_crossings(self, system, q, v, t):
+        """Node crossings of the contact point while the contact is closed, shape (1,):
+        :func:`node_crossing_value` of s* (before clamping to the beam) times
+        max(δ, 0) [m], zero (no crossing) while the contact is open and carries no
+        force. The force is C¹ in s*; the beam's curvature, so the contact's
+        stiffness along the beam, jumps at the nodes."""
+        delta = self._penetration(system, q)
+        raw = _closest(system, self.beam, q, self.point.position(system, q))[5]
+        return jnp.reshape(node_crossing_value(system.beams[self.beam].mesh, raw) * jnp.maximum(delta, 0.0), (1,))
