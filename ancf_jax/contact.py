@@ -43,6 +43,11 @@ Force elements:
   located in time by ``locate_crossings`` (:class:`~ancf_jax.forces.AbstractKinkedForce`).
   No contact while the closest point is beyond an end of the beam.
 
+Both name the node crossings of their point (:func:`node_crossing_value`,
+:class:`~ancf_jax.forces.AbstractNodeCrossing`), located only with
+``RunOptions(locate_load_nodes=True)``: the forces are C¹ in time there, and locating
+them changes a run's error by under 1 % (docs/moving-loads.md).
+
 A moving *mass* is a point mass on a sliding joint whose arc length or horizontal
 position is prescribed (:meth:`ancf_jax.model.Model.moving_mass`): the sliding joint
 carries its inertia, with the convective terms of the moving point, exactly.
@@ -157,13 +162,14 @@ def node_crossing_value(mesh, s):
     """(−1)ᵏ f (1 − f) with ξ = k + f the global element coordinate of the reference arc
     length s [m] (k the element holding s, f = (s − s_k)/l_k ∈ [0, 1); beyond the ends
     the end elements extended, :meth:`~ancf_jax.mesh.BeamMesh.locate`), ξ clamped to
-    [−½, n + ½] (n active elements). Continuous in s, exactly zero at the nodes
-    (ξ = 0 … n, the ends included), of one sign within each element and alternating
-    from element to element: its zero crossings are the node crossings of a point
-    moving along the beam and, at ξ = 0 and n, its entry and exit. Constant beyond ½
-    element off the ends (no further crossings)."""
+    [½, n − ½] (n active elements). Continuous in s, exactly zero at the interior nodes
+    (ξ = 1 … n − 1), of one sign within each element and alternating from element to
+    element: its zero crossings are the node crossings of a point moving along the
+    beam. Constant within ½ element of the ends and beyond them: a point's entry or
+    exit, where a moving force jumps, is no crossing (located, such a jump stays
+    inside a substep, and the error of the run grows: docs/moving-loads.md)."""
     k, x = mesh.locate(s)
-    xi = jnp.clip(k + x / mesh.element_lengths[k], -0.5, mesh.n_elements + 0.5)
+    xi = jnp.clip(k + x / mesh.element_lengths[k], 0.5, mesh.n_elements - 0.5)
     j = jnp.floor(xi)
     f = xi - j
     return jnp.where(jnp.mod(j, 2.0) == 0.0, 1.0, -1.0) * f * (1.0 - f)
@@ -189,12 +195,6 @@ class AbstractMovingLocation(eqx.Module):
         """(s [m], on_beam): the reference arc length of the loaded material point
         (clamped to [0, L]) and whether the load is on the beam."""
 
-    @abc.abstractmethod
-    def extended_arc_length(self, system, beam: int, q, t):
-        """s [m] of :meth:`locate` continued beyond the ends (s < 0 before the start,
-        s > L past the end, growing with the distance off the beam): continuous in t,
-        for the node-crossing values of :func:`node_crossing_value`."""
-
 
 class AtArcLength(AbstractMovingLocation):
     """The material point at reference arc length s = ``path(t)`` [m]."""
@@ -206,10 +206,6 @@ class AtArcLength(AbstractMovingLocation):
         length = system.beams[beam].mesh.length
         return jnp.clip(s, 0.0, length), (s >= 0.0) & (s <= length)
 
-    def extended_arc_length(self, system, beam: int, q, t):
-        """s = ``path(t)`` as it is."""
-        return self.path(t)
-
 
 class AtHorizontalPosition(AbstractMovingLocation):
     """The material point whose current horizontal coordinate is x = ``path(t)`` [m]
@@ -219,18 +215,6 @@ class AtHorizontalPosition(AbstractMovingLocation):
 
     def locate(self, system, beam: int, q, t):
         return arc_length_under(system, beam, q, self.path(t))
-
-    def extended_arc_length(self, system, beam: int, q, t):
-        """s under x on the beam; off it, the end's s minus (start end) or plus (far
-        end) the horizontal distance |x − x_end| [m] from the nearer end."""
-        x = self.path(t)
-        s, inside = arc_length_under(system, beam, q, x)
-        nodes = system.beam_nodes(q, beam)
-        mesh = system.beams[beam].mesh
-        x0, x1 = nodes[0, 0], nodes[mesh.n_elements, 0]
-        before = jnp.abs(x - x0) < jnp.abs(x - x1)
-        off = jnp.where(before, -jnp.abs(x - x0), jnp.abs(x - x1))
-        return jnp.where(inside, s, jnp.where(before, 0.0, mesh.length) + off)
 
 
 class MovingForce(AbstractLoad, AbstractNodeCrossing):
@@ -267,10 +251,9 @@ class MovingForce(AbstractLoad, AbstractNodeCrossing):
 
     def node_crossings(self, system, q, v, t):
         """:func:`node_crossing_value` of the loaded point, shape (1,): zero at the
-        nodes, where the generalized force S(s)ᵀF is C¹ in time (the second
-        derivative of the shape functions jumps), and at the ends, where the force
-        enters or leaves the beam (a jump)."""
-        s = self.location.extended_arc_length(system, self.beam, q, t)
+        interior nodes, where the generalized force S(s)ᵀF is C¹ in time (the second
+        derivative of the shape functions jumps)."""
+        s, _ = self.location.locate(system, self.beam, q, t)
         return jnp.reshape(node_crossing_value(system.beams[self.beam].mesh, s), (1,))
 
 
@@ -300,13 +283,14 @@ class UnilateralContact(AbstractKinkedForce, AbstractNodeCrossing):
         return closest_arc_length(system, self.beam, q, self.point.position(system, q))
 
     def _gaps(self, system, q):
-        """(g, on the beam): the gap g = σ n̂·(p − r(s*)) − g₀ [m] (negative:
-        penetration) at the closest point, whether or not it is on the beam."""
+        """(g, on the beam, s* before clamping): the gap g = σ n̂·(p − r(s*)) − g₀ [m]
+        (negative: penetration) at the closest point, whether or not it is on the
+        beam."""
         p = self.point.position(system, q)
-        _, on, e, u, length, _ = _closest(system, self.beam, q, p)
+        _, on, e, u, length, raw = _closest(system, self.beam, q, p)
         r1 = shape_functions_dx(u, length) @ e
         n = jnp.stack([-r1[1], r1[0]]) / jnp.linalg.norm(r1)
-        return self.side * jnp.dot(n, p - shape_functions(u, length) @ e) - self.offset, on
+        return self.side * jnp.dot(n, p - shape_functions(u, length) @ e) - self.offset, on, raw
 
     def gap(self, system, q):
         """g = σ n̂·(p − r(s*)) − g₀ [m] (negative: penetration), whether or not s* is
@@ -315,7 +299,7 @@ class UnilateralContact(AbstractKinkedForce, AbstractNodeCrossing):
 
     def _penetration(self, system, q):
         """δ = −g while the closest point is on the beam, else −1 m (open)."""
-        g, on = self._gaps(system, q)
+        g, on, _ = self._gaps(system, q)
         return jnp.where(on, -g, -1.0)
 
     def _state(self, system, q, v):
@@ -363,6 +347,6 @@ class UnilateralContact(AbstractKinkedForce, AbstractNodeCrossing):
         max(δ, 0) [m], zero (no crossing) while the contact is open and carries no
         force. The force is C¹ in s*; the beam's curvature, so the contact's
         stiffness along the beam, jumps at the nodes."""
-        delta = self._penetration(system, q)
-        raw = _closest(system, self.beam, q, self.point.position(system, q))[5]
+        g, on, raw = self._gaps(system, q)
+        delta = jnp.where(on, -g, -1.0)
         return jnp.reshape(node_crossing_value(system.beams[self.beam].mesh, raw) * jnp.maximum(delta, 0.0), (1,))

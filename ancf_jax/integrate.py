@@ -86,9 +86,9 @@ class RunOptions(eqx.Module):
             slack/taut transitions of one-sided spring-dampers and contacts, and at
             reversals of sliding friction.
         locate_load_nodes: also split steps where a moving force's point or a closed
-            contact's point crosses a node of its beam (a moving force also where it
-            enters or leaves the beam): their forces are C¹ there, and locating them
-            changes a run's error by under 1 % (docs/moving-loads.md), so it is off.
+            contact's point crosses an interior node of its beam: their forces are C¹
+            there, and locating them changes a run's error by under 1 %
+            (docs/moving-loads.md), so it is off.
         crossing_iterations: regula-falsi iterations to locate a crossing.
         max_halvings: when a step fails (Newton not converged, non-finite state,
             sliding jump), redo it in substeps, halving down to h / 2^max_halvings and

@@ -151,13 +151,16 @@ T_BOUNCE = 0.06
 
 def bounce_model():
     """A point mass falling (no gravity, speed V0) onto a rigid track (every node
-    clamped) from a gap GAP0, through a penalty contact k = K_C (damping set per run)."""
+    clamped, x from −0.5 to 1, a node at x = 0.25) from a gap GAP0, through a penalty
+    contact k = K_C (damping set per run). A moving force on the track, standing at
+    arc length 0.1 m (x = −0.4; speed 0: set per run), which the clamps take up."""
     m = Model(gravity=(0.0, 0.0))
     m.add_beam("track", mesh.straight((-0.5, 0.0), (1.0, 0.0), 1.0, 2), Section(2e11, 1e-4, 1e-8, 0.8))
     for i in range(3):
         m.clamp(f"c{i}", "track", i)
     m.add_point_mass("ball", mass=M_BALL, position=(0.1, GAP0), velocity=(0.0, -V0))
     m.contact("contact", body_point("ball"), "track", stiffness=K_C, damping=1.0)
+    m.moving_force("rider", "track", (0.0, -1.0), path=ConstantSpeed(0.1, 0.0), along="arc_length")
     return m.build()
 
 
@@ -191,11 +194,15 @@ def bounce_runs():
         sys = eqx.tree_at(lambda s: s.forces[0].damping, system,
                           jnp.asarray(2 * zeta * np.sqrt(K_C * M_BALL), float))
         for h in STEPS:
-            run = run_fixed(sys, state, GeneralizedAlpha().forward_only(), h, T_BOUNCE, chunk=60,
-                            options=RunOptions(locate_crossings=True, max_halvings=DEFAULT_HALVINGS))
+            run = run_fixed(sys, state, GeneralizedAlpha().forward_only(), h, T_BOUNCE, chunk=60, options=BOUNCE_OPTIONS)
             assert run.status == 0
             out[zeta, h] = run
     return out
+
+
+#: options of the bounce runs: contact events and node crossings of the contact point
+#: and the moving force located (the bounce itself crosses no node)
+BOUNCE_OPTIONS = RunOptions(locate_crossings=True, locate_load_nodes=True, max_halvings=DEFAULT_HALVINGS)
 
 
 def bounce_errors(run, zeta):
@@ -362,3 +369,56 @@ def test_speed_is_a_parameter_by_name_and_scenario_key():
     assert float(q.set(string, 4.0).forces[0].location.path.speed) == 4.0
     with pytest.raises(ModelError, match="no moving force, moving mass or chain named 'nothing'"):
         resolve(string, ["speed.nothing"])
+
+
+# ---------------------------------------------------------------------------- node crossings
+def test_node_crossing_value_changes_sign_at_interior_nodes_only():
+    """(−1)ᵏ f (1 − f) of the global element coordinate on an uneven mesh (elements of
+    lengths alternating 1:2, padded): exactly zero at the interior nodes, one sign
+    within each element, alternating, continuous, constant near and beyond the ends
+    (a point's entry and exit are no crossings)."""
+    from ancf_jax.contact import node_crossing_value
+    from .dynamics import uneven_arc
+
+    track = uneven_arc(5, 1.0, 1.2)
+    padded = mesh.through_points(np.asarray(track.reference_nodes)[:, :2], np.asarray(track.reference_nodes)[:, 2:],
+                                 n_max=8)
+    edges = np.asarray(padded.node_arc_lengths)[:6]
+    value = jax.jit(jax.vmap(lambda s: node_crossing_value(padded, s)))
+    assert np.all(np.asarray(value(jnp.asarray(edges[1:5]))) == 0.0)
+    s = np.linspace(-0.3, edges[-1] + 0.3, 4001)
+    g = np.asarray(value(jnp.asarray(s)))
+    changes = s[1:][np.sign(g[1:]) * np.sign(g[:-1]) < 0]
+    np.testing.assert_allclose(changes, edges[1:5], atol=2 * (s[1] - s[0]))
+    assert np.max(np.abs(np.diff(g))) < 2 * (s[1] - s[0]) / np.min(np.diff(edges))  # |dg/ds| <= 1 / l
+    mids = 0.5 * (edges[1:] + edges[:-1])
+    np.testing.assert_allclose(np.asarray(value(jnp.asarray(mids))), [0.25, -0.25, 0.25, -0.25, 0.25])
+    ends = np.asarray(value(jnp.asarray([-1.0, 0.0, edges[-1], edges[-1] + 1.0])))
+    np.testing.assert_allclose(ends, [0.25, 0.25, 0.25, 0.25])
+
+
+def test_node_crossings_of_a_contact_point_and_a_moving_force_are_located(bounce_runs):
+    """The undamped bounce with the ball also moving along the track at −5.9 m/s
+    (frictionless: its x is 0.1 − 5.9 t), and the moving force running at 13.7 m/s
+    along the arc length from x = −0.4: the track's node at x = 0 is crossed by the contact point at
+    t = 0.1/5.9 = 16.95 ms, in contact (closed from 10 to 41.42 ms), and by the force
+    at 0.4/13.7 = 29.20 ms. With h = 0.5 ms the located crossings are those of the
+    bounce standing still (bounce_runs: the contact's opening in step 83, and its
+    closing where round-off puts it) plus exactly the steps holding those two times,
+    34 and 59. The bounce programs are reused (speeds and state are data)."""
+    h = 5e-4
+    system, state = bounce_model()
+    k_rider = next(i for i, f in enumerate(system.forces) if f.name == "rider")
+    sys = eqx.tree_at(lambda s: (s.forces[0].damping, s.forces[k_rider].location.path.speed), system,
+                      (jnp.asarray(0.0, float), jnp.asarray(13.7, float)))
+    ball = system.body_offset(0)
+    moving = eqx.tree_at(lambda s: s.v, state, state.v.at[ball].set(-5.9))
+    run = run_fixed(sys, moving, GeneralizedAlpha().forward_only(), h, T_BOUNCE, chunk=60, options=BOUNCE_OPTIONS)
+    assert run.status == 0
+    np.testing.assert_allclose(run.q[:, ball], 0.1 - 5.9 * run.t, atol=1e-12)
+    crossed = [int(np.ceil(t / h)) for t in (0.1 / 5.9, 0.4 / 13.7)]
+    assert crossed == [34, 59]
+    standing = np.nonzero(bounce_runs[0.0, h].crossings)[0]
+    t_open = GAP0 / V0 + np.pi * np.sqrt(M_BALL / K_C)
+    assert int(np.ceil(t_open / h)) in standing and len(standing) <= 2
+    np.testing.assert_array_equal(np.nonzero(run.crossings)[0], np.sort(np.concatenate([standing, crossed])))
