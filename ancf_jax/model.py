@@ -642,6 +642,8 @@ class Model:
         if beam not in self._beams:
             raise ModelError(f"moving mass {name!r} refers to beam {beam!r}, which does not exist "
                              f"(beams: {', '.join(map(repr, self._beams)) or 'none'})")
+        if along == "x":
+            self._check_monotonic_x(beam, f'moving mass {name!r} along="x"', '"arc_length", or ')
         spec = self._beams[beam]
         nodes = np.asarray(spec.mesh.reference_nodes if spec.initial_nodes is None else spec.initial_nodes)
         lengths = np.asarray(spec.mesh.element_lengths)[: int(spec.mesh.n_elements)]
@@ -862,6 +864,10 @@ class Model:
                 rotating(a["body"], what, "a rotation (torque)")
             if kind in ("moving_force", "contact"):
                 beam(a["beam"], what)
+            if kind == "moving_force" and a["along"] == "x":
+                self._check_monotonic_x(a["beam"], f'moving force {name!r} along="x"', '"arc_length", or ')
+            if kind == "contact":
+                self._check_monotonic_x(a["beam"], f"contact {name!r} (its search starts under the point's x)")
             if kind == "mass_proportional" and a["item"] not in self._beams and a["item"] not in self._bodies:
                 known = ", ".join(map(repr, beams + bodies)) or "none"
                 raise ModelError(f"{what} refers to {a['item']!r}, which is no beam or body "
@@ -872,6 +878,20 @@ class Model:
             for member, (pa, pb) in a.get("members", {}).items():
                 point(pa, f"member {member!r} of {what}")
                 point(pb, f"member {member!r} of {what}")
+
+    def _check_monotonic_x(self, beam: str, what: str, alternative: str = "") -> None:
+        """Moving loads along x and contacts find the element under a horizontal
+        position from the nodes' x: the x of the beam's initial shape must be strictly
+        monotonic along it (ModelError naming ``what`` otherwise)."""
+        spec = self._beams[beam]
+        nodes = np.asarray(spec.mesh.reference_nodes if spec.initial_nodes is None else spec.initial_nodes)
+        x = nodes[: int(spec.mesh.n_elements) + 1, 0]
+        dx = np.diff(x)
+        if not (np.all(dx > 0.0) or np.all(dx < 0.0)):
+            shown = ", ".join(f"{v:g}" for v in x[:8]) + (", ..." if len(x) > 8 else "")
+            raise ModelError(f"{what} needs beam {beam!r} to run left to right or right to left, but the x of its "
+                             f"nodes is not strictly monotonic (x = {shown} m); accepted: {alternative}a beam whose "
+                             f"node x increases or decreases along it (a track, rope or wire)")
 
     def build(self, *, pad_to: dict | int | None = None, hold: bool | None = None,
               assemble: bool = True, tolerance: float = ASSEMBLY_TOLERANCE,

@@ -422,3 +422,36 @@ def test_node_crossings_of_a_contact_point_and_a_moving_force_are_located(bounce
     t_open = GAP0 / V0 + np.pi * np.sqrt(M_BALL / K_C)
     assert int(np.ceil(t_open / h)) in standing and len(standing) <= 2
     np.testing.assert_array_equal(np.nonzero(run.crossings)[0], np.sort(np.concatenate([standing, crossed])))
+
+
+def test_moving_loads_along_x_and_contacts_need_a_beam_monotonic_in_x():
+    """On a vertical mast (its nodes all at x = 2) a moving force or mass along x and a
+    contact are refused with one line naming the item, the beam and what is accepted,
+    when the item is added (moving mass) or at the start of build (before anything is
+    compiled); along the arc length they are accepted."""
+    from ancf_jax.errors import ModelError
+
+    def mast():
+        m = Model(gravity=(0.0, 0.0))
+        m.add_beam("mast", mesh.straight((2.0, 0.0), (0.0, 1.0), 1.0, 2), Section(1e9, 1e-4, 1e-9, 1.0))
+        m.add_point_mass("ball", mass=1.0, position=(2.5, 0.5))
+        return m
+
+    needs = r"needs beam 'mast' to run left to right or right to left, but the x of its nodes is not strictly " \
+            r"monotonic \(x = 2, 2, 2 m\); accepted: "
+    m = mast()
+    m.moving_force("P", "mast", (1.0, 0.0), path=ConstantSpeed(0.0, 1.0))
+    with pytest.raises(ModelError, match=r"^moving force 'P' along=\"x\" " + needs + '"arc_length", or a beam') as err:
+        m.build()
+    assert "\n" not in str(err.value)
+    with pytest.raises(ModelError, match=r"^moving mass 'M' along=\"x\" " + needs):
+        mast().moving_mass("M", "mast", mass=1.0, path=ConstantSpeed(2.0, 1.0))
+    m = mast()
+    m.contact("touch", body_point("ball"), "mast", stiffness=1e3)
+    with pytest.raises(ModelError, match=r"^contact 'touch' \(its search starts under the point's x\) " + needs
+                       + "a beam whose node x"):
+        m.build()
+    m = mast()
+    m.moving_force("P", "mast", (1.0, 0.0), path=ConstantSpeed(0.0, 1.0), along="arc_length")
+    m.moving_mass("M", "mast", mass=1.0, path=ConstantSpeed(0.2, 1.0), along="arc_length")
+    m._check_references()

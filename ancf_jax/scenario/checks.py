@@ -466,21 +466,24 @@ class Checker:
                 if f.point.beam == f.beam:
                     raise Invalid(path + ("point",), f'a point of beam "{f.beam}" cannot contact that beam',
                                   "a body point, a ground point or a point of another beam")
+                self.monotonic(path + ("beam",), f.beam, "a contact (its search starts under the point's x)",
+                               "a beam running left to right or right to left (a track, rope or wire)")
             else:
                 self.point(path + ("a",), f.a)
                 self.point(path + ("b",), f.b)
                 if f.type == "spring_damper":
                     self.apart(path, f.a, f.b)
 
-    def monotonic(self, path, beam):
-        """along = "x" needs a beam whose initial x is strictly monotonic along it."""
+    def monotonic(self, path, beam, needs='along = "x"',
+                  accepted='"arc_length", or a beam running left to right or right to left (a track, rope or wire)'):
+        """along = "x" (and a contact) needs a beam whose initial x is strictly
+        monotonic along it."""
         x = self.initial_x(beam)
         dx = np.diff(x)
         if not (np.all(dx > 0.0) or np.all(dx < 0.0)):
-            raise Invalid(path, f'along = "x" needs a beam whose x is monotonic along it; the nodes of '
+            raise Invalid(path, f'{needs} needs a beam whose x is monotonic along it; the nodes of '
                           f'beam "{beam}" are at x = {", ".join(f"{v:g}" for v in x[:8])}'
-                          + (", ..." if len(x) > 8 else ""),
-                          '"arc_length", or a beam running left to right or right to left (a track, rope or wire)')
+                          + (", ..." if len(x) > 8 else ""), accepted)
 
     def initial_x(self, beam) -> np.ndarray:
         """x [m] of the nodes of a beam's initial shape (a catenary: its ends)."""

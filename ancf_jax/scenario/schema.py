@@ -435,7 +435,8 @@ class ContactSpec(Table):
     """Unilateral penalty contact between a point and a beam at the beam's closest point:
     normal force k δ + max(c δ̇, −k δ) while the penetration δ > 0, else 0 (it never pulls);
     gap g = side·n̂·(p − r(s*)) − offset, n̂ the beam's left normal. No contact while the
-    closest point is beyond an end of the beam."""
+    closest point is beyond an end of the beam. The beam's x must be monotonic along it
+    (the search starts under the point's x)."""
 
     type: Literal["contact"] = key(doc="load type")
     point: PointRef = key(doc="the contacting point (e.g. the head of a chain: { body = \"pan.2\" })")

@@ -138,6 +138,8 @@ CASES = [
      "loads.P.along", '"x", "arc_length"'),
     ("moving force along x on a vertical beam", _text(('beam = "wire"\nforce', 'beam = "mast"\nforce'),
                                                      extra=VERTICAL), "loads.P.along", '"arc_length"'),
+    ("contact with a vertical beam", _text(('beam = "wire"\nstiffness', 'beam = "mast"\nstiffness'), extra=VERTICAL),
+     "loads.touch.beam", "a beam running left to right or right to left"),
     ("moving force profile outside the safe set", _text(("speed = 5.0\n", 'speed = 5.0\nprofile = "open(1)"\n')),
      "loads.P.profile", "an expression in t"),
     ("zero moving mass", _text(("mass = 0.05", "mass = 0.0")), "moving_masses.wagon.mass", "a number > 0 [kg]"),
