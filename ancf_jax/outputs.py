@@ -87,7 +87,9 @@ class Output:
             :meth:`~ancf_jax.results.Results.joint_moment`), ``"energy"``,
             ``"member"`` (force [N] and engaged state of a spring-damper named ``target``),
             ``"friction"`` (friction force and normal reaction [N] of a sliding
-            friction), ``"drive"`` (tangential force [N] of a sliding drive),
+            friction), ``"drive"`` (tangential force [N] of a sliding drive; the drive
+            ``NAME.drive`` of a moving mass: its horizontal force along x,
+            :meth:`~ancf_jax.results.Results.drive_force`),
             ``"contact"`` (normal force [N], gap [m], engaged state, contact arc length
             [m] of a unilateral contact), ``"load"`` (position y, x [m] and arc length
             s [m] of the beam point under a moving force, and whether it is on the beam).

@@ -321,6 +321,8 @@ def make_outputs(spec: S.ScenarioSpec) -> list[Output]:
         elif o.type == "reaction":
             out.append(Output(name, "reaction", o.joint,
                               o.component if o.component is not None else str(o.index)))
+        elif o.type == "drive" and o.moving_mass is not None:
+            out.append(Output(name, "drive", f"{o.moving_mass}.drive", o.component))
         elif o.type in ("friction", "drive"):
             out.append(Output(name, o.type, f"{o.joint}.{o.type}", o.component))
         elif o.type in ("member", "contact", "load"):

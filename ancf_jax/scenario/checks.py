@@ -654,8 +654,20 @@ class Checker:
                     raise Invalid(path + ("index",), f'joint "{o.joint}" has {size} equations',
                                   f"an integer 0 .. {size - 1}")
 
+            elif o.type == "drive" and o.joint is None:
+                self.exclusive(path, o, ("joint", "moving_mass"), required=True)
+                if o.moving_mass not in self.spec.moving_masses:
+                    raise Invalid(path + ("moving_mass",), f'"{o.moving_mass}" is not a moving mass',
+                                  f"the name of a moving mass: {_names(self.spec.moving_masses)}")
             elif o.type in ("friction", "drive"):
+                if o.type == "drive":
+                    self.exclusive(path, o, ("joint", "moving_mass"))
                 self.joint(path + ("joint",), o.joint, ("sliding",))
+                if o.type == "drive" and o.joint in self.made_sliders:
+                    mass = self.made_sliders[o.joint]
+                    raise Invalid(path + ("joint",), f'sliding joint "{o.joint}" is moving mass "{mass}"\'s: '
+                                  f'its drive is named by moving_mass = "{mass}"',
+                                  "a sliding joint with a drive table, or moving_mass = NAME")
                 if o.joint in self.made_sliders or getattr(self.spec.joints[o.joint], o.type) is None:
                     raise Invalid(path + ("joint",), f'sliding joint "{o.joint}" has no {o.type}',
                                   f"a sliding joint with a {o.type} table")

@@ -832,10 +832,14 @@ class FrictionOutput(Table):
 
 
 class DriveOutput(Table):
-    """The drive force of a sliding joint on its body along +s."""
+    """The drive force of a sliding joint on its body along +s (``joint``), or of a
+    moving mass (``moving_mass``; its drive NAME.drive): along = "x", the horizontal
+    force [N] on the mass; along = "arc_length", the force on it along +s. Exactly one
+    of joint and moving_mass."""
 
     type: Literal["drive"] = key(doc="output type")
-    joint: str = key(doc="sliding joint name (with a drive)")
+    joint: Optional[str] = key(None, doc="sliding joint name (with a drive table)")
+    moving_mass: Optional[str] = key(None, doc="moving mass name")
     component: Literal[COMPONENTS["drive"]] = key("force", unit="N", doc="the force")
 
 
