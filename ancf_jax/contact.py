@@ -41,7 +41,10 @@ Force elements:
   :class:`~ancf_jax.forces.AbstractOneSidedSpringDamper`). Parts: potential ½ k δ₊²,
   dissipation d δ̇ ≥ 0. Its kinks (contact closing, the force reaching zero) are
   located in time by ``locate_crossings`` (:class:`~ancf_jax.forces.AbstractKinkedForce`).
-  No contact while the closest point is beyond an end of the beam.
+  No contact while the closest point is beyond an end of the beam. Optional friction
+  along the beam (:class:`ContactFriction`): the regularized Coulomb law of sliding
+  joints, −μ F_n tanh(u/v_ε) − c u, u the point's speed relative to the beam's
+  material point under it.
 
 Both name the node crossings of their point (:func:`node_crossing_value`,
 :class:`~ancf_jax.forces.AbstractNodeCrossing`), located only with
@@ -67,6 +70,7 @@ from .forces import AbstractKinkedForce, AbstractLoad, AbstractNodeCrossing
 from .functions import AbstractPath
 from .element.shape_functions import shape_functions, shape_functions_dx
 from .points import AbstractPoint, element_coordinates
+from .sliding import regularized_coulomb, reversal_kink
 
 #: most Newton steps of the searches on the deformed beam (from the linear interpolation
 #: in the node interval: the residual falls below 1e-14 m after 3 on the tests' wires)
@@ -257,6 +261,29 @@ class MovingForce(AbstractLoad, AbstractNodeCrossing):
         return jnp.reshape(node_crossing_value(system.beams[self.beam].mesh, s), (1,))
 
 
+class ContactFriction(eqx.Module):
+    """Regularized Coulomb friction at a :class:`UnilateralContact` (the law of sliding
+    joints, :func:`~ancf_jax.sliding.regularized_coulomb`):
+
+        F_t = −μ F_n tanh(u / v_ε) − c u  [N]   on the point along t̂, −F_t t̂ on the beam,
+
+    F_n the contact's normal force, t̂ = r′(s*)/|r′(s*)| the beam's unit tangent at the
+    contact point and u = t̂·(ṗ − ṙ(s*)) [m/s] the sliding speed of the point relative
+    to the beam's material point under it (ṙ at fixed s*). Zero while the contact is
+    open. Its power F_t u <= 0 is dissipation.
+
+    Attributes:
+        mu: friction coefficient μ >= 0.
+        regularization: v_ε [m/s] > 0 (a point held by friction creeps at
+            v_ε artanh(F/(μ F_n)) under a tangential load F < μ F_n).
+        viscous: c [N·s/m] >= 0.
+    """
+
+    mu: jnp.ndarray
+    regularization: jnp.ndarray
+    viscous: jnp.ndarray
+
+
 class UnilateralContact(AbstractKinkedForce, AbstractNodeCrossing):
     """Penalty contact between ``point`` and beam ``beam`` at the closest point
     (module docstring).
@@ -269,6 +296,7 @@ class UnilateralContact(AbstractKinkedForce, AbstractNodeCrossing):
         stiffness: k [N/m] > 0.
         damping: c [N·s/m] >= 0.
         offset: g₀ [m]: the gap at which contact begins (radii of wire and shoe).
+        friction: :class:`ContactFriction`, or None: frictionless.
     """
 
     point: AbstractPoint
@@ -277,6 +305,7 @@ class UnilateralContact(AbstractKinkedForce, AbstractNodeCrossing):
     stiffness: jnp.ndarray
     damping: jnp.ndarray
     offset: jnp.ndarray
+    friction: Optional[ContactFriction] = None
 
     def contact_point(self, system, q):
         """(s* [m], on_beam): the closest point of the beam to the contacting point."""
@@ -325,9 +354,41 @@ class UnilateralContact(AbstractKinkedForce, AbstractNodeCrossing):
     def applied_force(self, system, q, v, t):
         return jnp.zeros_like(q)
 
+    def _slip(self, system, q, v):
+        """(u [m/s], t̂ (2,), relative position p(q′) − r(q′; s*) as a function of q′ with
+        s* = s*(q) held): the sliding speed and tangent of :class:`ContactFriction`."""
+        p = self.point.position(system, q)
+        s, _, e, u, length, _ = _closest(system, self.beam, q, p)
+        r1 = shape_functions_dx(u, length) @ e
+        tangent = r1 / jnp.linalg.norm(r1)
+        beam = system.beams[self.beam]
+
+        def relative(qq):
+            return self.point.position(system, qq) - beam.position(system.beam_nodes(qq, self.beam), s)
+
+        _, rate = jax.jvp(relative, (q,), (v,))
+        return jnp.dot(tangent, rate), tangent, relative
+
+    def tangential_force(self, system, q, v):
+        """F_t [N] on the point along the beam's unit tangent t̂ (its reaction on the
+        beam), :class:`ContactFriction`; 0 without friction."""
+        if self.friction is None:
+            return jnp.zeros(())
+        u, _, _ = self._slip(system, q, v)
+        f = self.friction
+        return regularized_coulomb(self.normal_force(system, q, v), u, f.mu, f.regularization, f.viscous)
+
     def dissipative_force(self, system, q, v):
         _, grad, _, d = self._state(system, q, v)
-        return -d * grad
+        out = -d * grad
+        if self.friction is not None:
+            normal = self.stiffness * jnp.maximum(self._penetration(system, q), 0.0) + d
+            u, tangent, relative = self._slip(system, q, v)
+            f = self.friction
+            force = regularized_coulomb(normal, u, f.mu, f.regularization, f.viscous)
+            _, vjp = jax.vjp(relative, q)
+            out = out + vjp(force * tangent)[0]
+        return out
 
     def coordinates(self, system, q, t):
         s, _ = self.contact_point(system, q)
@@ -336,10 +397,15 @@ class UnilateralContact(AbstractKinkedForce, AbstractNodeCrossing):
     def kinks(self, system, q, v):
         """δ [m] (contact closing or opening; the stiffness jumps from 0 to k, a damped
         contact's force by c δ̇) and k δ + c δ̇ [N] while δ > 0 (the force reaching
-        zero: the damper's limit), else k δ."""
+        zero: the damper's limit), else k δ; with friction, the reversal of the sliding
+        speed u while closed (:func:`~ancf_jax.sliding.reversal_kink`), else 0."""
         delta, _, rate, _ = self._state(system, q, v)
-        return jnp.stack([delta, jnp.where(delta > 0.0, self.stiffness * delta + self.damping * rate,
-                                           self.stiffness * delta)])
+        values = [delta, jnp.where(delta > 0.0, self.stiffness * delta + self.damping * rate, self.stiffness * delta)]
+        if self.friction is not None:
+            # the reversal of the sliding speed while in contact (friction's near-jump)
+            u, _, _ = self._slip(system, q, v)
+            values.append(jnp.where(delta > 0.0, reversal_kink(u, self.friction.regularization), 0.0))
+        return jnp.stack(values)
 
     def node_crossings(self, system, q, v, t):
         """Node crossings of the contact point while the contact is closed, shape (1,):

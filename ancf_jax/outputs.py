@@ -43,7 +43,7 @@ COMPONENTS = {
     "member": ("tension", "engaged"),
     "friction": ("force", "normal"),
     "drive": ("force",),
-    "contact": ("force", "gap", "engaged", "s"),
+    "contact": ("force", "gap", "engaged", "s", "friction"),
     "load": ("y", "x", "s", "on_beam"),
     "energy": ("kinetic", "gravity", "strain", "springs", "dissipated", "external", "constraint",
                "total", "balance_error"),
@@ -62,7 +62,7 @@ UNITS = {"node": {"x": "m", "y": "m", "slope_x": "-", "slope_y": "-"}, "point": 
          "stress": "Pa", "axial": {"force": "N", "strain": "-"},
          "bending": {"moment": "N*m", "curvature": "1/m"}, "reaction": {"normal": "N", "tangential": "N", "fx": "N", "fy": "N", "moment": "N*m"}, "member": {"tension": "N", "engaged": "-"},
          "friction": "N", "drive": "N", "energy": "J",
-         "contact": {"force": "N", "gap": "m", "engaged": "-", "s": "m"},
+         "contact": {"force": "N", "gap": "m", "engaged": "-", "s": "m", "friction": "N"},
          "load": {"y": "m", "x": "m", "s": "m", "on_beam": "-"}}
 
 

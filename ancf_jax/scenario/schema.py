@@ -284,9 +284,10 @@ class FixedSpec(Table):
 
 
 class FrictionSpec(Table):
-    """Regularized Coulomb friction on a sliding joint: F = −μ N tanh(u/v_ε) − c u on the
-    body along the beam, N the joint's normal reaction, u the sliding speed (named
-    ``JOINT.friction``)."""
+    """Regularized Coulomb friction along a beam: F = −μ N tanh(u/v_ε) − c u, u the
+    sliding speed; on a sliding joint (named ``JOINT.friction``) N is the joint's normal
+    reaction and F acts on the body, on a contact N is the contact's normal force and F
+    acts on the point."""
 
     mu: float = key(unit="-", ge=0.0, allow_inf_nan=False, doc="friction coefficient μ")
     regularization: float = key(DEFAULT_REGULARIZATION, unit="m/s", gt=0.0, allow_inf_nan=False,
@@ -447,6 +448,7 @@ class ContactSpec(Table):
                             "(above a beam running in +x), -1 the other (below: a pantograph under a wire)")
     offset: float = key(0.0, unit="m", ge=0.0, allow_inf_nan=False,
                         doc="g₀, the gap at which contact begins (radii)")
+    friction: Optional[FrictionSpec] = key(None, doc="Coulomb friction along the beam (default none)")
 
 
 Load = Annotated[Union[PointForceSpec, TorqueSpec, SpringDamperSpec, MassProportionalSpec, MovingForceSpec,
@@ -845,11 +847,13 @@ class DriveOutput(Table):
 
 class ContactOutput(Table):
     """The normal force of a contact (>= 0), its gap g (negative: penetration), its
-    engaged state (1: closed) or the arc length s* of the closest point on the beam."""
+    engaged state (1: closed), the arc length s* of the closest point on the beam, or
+    its friction force on the point along the beam's tangent."""
 
     type: Literal["contact"] = key(doc="output type")
     load: str = key(doc="contact name (in [loads])")
-    component: Literal[COMPONENTS["contact"]] = key("force", unit="N, m, -, m", doc="force, gap, state or arc length")
+    component: Literal[COMPONENTS["contact"]] = key("force", unit="N, m, -, m, N",
+                                                    doc="force, gap, state, arc length or friction")
 
 
 class LoadOutput(Table):

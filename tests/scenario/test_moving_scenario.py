@@ -95,6 +95,21 @@ def test_the_example_builds_into_the_system_the_file_describes(tmp_path):
     assert q[system.sliding_offset] == pytest.approx(0.1 / 1.001, abs=1e-12)
 
 
+def test_contact_friction_table_builds_a_contact_friction(tmp_path):
+    """[loads.NAME.friction] of a contact (the sliding joints' friction table) makes its
+    ContactFriction; without it the contact is frictionless."""
+    from ancf_jax.contact import ContactFriction
+
+    text = _text(("side = -1", "side = -1\n\n[loads.touch.friction]\nmu = 0.2\nregularization = 2e-3"))
+    system, _ = load_scenario(str(write(tmp_path, text))).model().build(assemble=False)
+    touch = next(f for f in system.forces if f.name == "touch")
+    assert isinstance(touch.friction, ContactFriction)
+    assert [float(v) for v in (touch.friction.mu, touch.friction.regularization, touch.friction.viscous)] == [
+        0.2, 2e-3, 0.0]
+    plain, _ = load_scenario(str(write(tmp_path, EXAMPLE))).model().build(assemble=False)
+    assert next(f for f in plain.forces if f.name == "touch").friction is None
+
+
 def test_moving_mass_along_the_arc_length_drives_its_sliding_joint(tmp_path):
     sc = load_scenario(str(write(tmp_path, EXAMPLE)), ['moving_masses.wagon.along="arc_length"',
                                                        'loads.P.along="arc_length"'])
