@@ -270,7 +270,8 @@ class ContactFriction(eqx.Module):
     F_n the contact's normal force, t̂ = r′(s*)/|r′(s*)| the beam's unit tangent at the
     contact point and u = t̂·(ṗ − ṙ(s*)) [m/s] the sliding speed of the point relative
     to the beam's material point under it (ṙ at fixed s*). Zero while the contact is
-    open. Its power F_t u <= 0 is dissipation.
+    open (penetration δ <= 0), the viscous part too. Its power F_t u <= 0 is
+    dissipation.
 
     Attributes:
         mu: friction coefficient μ >= 0.
@@ -375,17 +376,21 @@ class UnilateralContact(AbstractKinkedForce, AbstractNodeCrossing):
         if self.friction is None:
             return jnp.zeros(())
         u, _, _ = self._slip(system, q, v)
+        return self._friction_law(self._penetration(system, q), self.normal_force(system, q, v), u)
+
+    def _friction_law(self, delta, normal, u):
+        """F_t [N] of :class:`ContactFriction` at penetration δ, normal force F_n and
+        sliding speed u; zero while the contact is open (δ <= 0), viscous part
+        included."""
         f = self.friction
-        return regularized_coulomb(self.normal_force(system, q, v), u, f.mu, f.regularization, f.viscous)
+        return jnp.where(delta > 0.0, regularized_coulomb(normal, u, f.mu, f.regularization, f.viscous), 0.0)
 
     def dissipative_force(self, system, q, v):
-        _, grad, _, d = self._state(system, q, v)
+        delta, grad, _, d = self._state(system, q, v)
         out = -d * grad
         if self.friction is not None:
-            normal = self.stiffness * jnp.maximum(self._penetration(system, q), 0.0) + d
             u, tangent, relative = self._slip(system, q, v)
-            f = self.friction
-            force = regularized_coulomb(normal, u, f.mu, f.regularization, f.viscous)
+            force = self._friction_law(delta, self.stiffness * jnp.maximum(delta, 0.0) + d, u)
             _, vjp = jax.vjp(relative, q)
             out = out + vjp(force * tangent)[0]
         return out

@@ -469,7 +469,8 @@ def test_contact_friction_against_coulomb_and_momentum():
     block speed while sliding and momentum to round-off (3e-14), common speed 2.7e-6
     m/s, dissipation and energy balance 1.6e-6 J (second order: 3.5e-7 J at 0.5 ms;
     the regularization's creep, v_ε = 1 mm/s, adds about v_ε² π² / (12 μ g) = 3e-7 m
-    to the sliding distance)."""
+    to the sliding distance). With a viscous part the force adds −c u in contact, and
+    it vanishes, viscous part included, once the block is lifted off."""
     g, mu, k, mass, v0 = 9.81, 0.3, 1e5, 1.0, 2.0
     m = Model(gravity=(0.0, -g))
     m.add_beam("track", mesh.straight((0.0, 0.0), (1.0, 0.0), 2.0, 2), Section(2e11, 1e-4, 1e-8, 0.8))
@@ -502,3 +503,9 @@ def test_contact_friction_against_coulomb_and_momentum():
     dissipated = 0.5 * mass * v0**2 * beam_mass / (mass + beam_mass)
     assert energy["dissipated"][-1] == pytest.approx(dissipated, abs=3e-6)
     assert np.max(np.abs(energy["balance_error"])) < 3e-6
+    # with a viscous part c = 1 N·s/m: −μ m g − c v₀ in contact, nothing once lifted
+    k_contact = next(i for i, f in enumerate(system.forces) if f.name == "contact")
+    viscous = eqx.tree_at(lambda s: s.forces[k_contact].friction.viscous, system, jnp.asarray(1.0))
+    force = jax.jit(lambda q: viscous.forces[k_contact].tangential_force(viscous, q, state.v))
+    assert float(force(state.q)) == pytest.approx(-mu * mass * g - v0, rel=1e-12)
+    assert float(force(state.q.at[system.body_offset(0) + 1].set(0.01))) == 0.0
