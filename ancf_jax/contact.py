@@ -41,7 +41,15 @@ Force elements:
   :class:`~ancf_jax.forces.AbstractOneSidedSpringDamper`). Parts: potential ½ k δ₊²,
   dissipation d δ̇ ≥ 0. Its kinks (contact closing, the force reaching zero) are
   located in time by ``locate_crossings`` (:class:`~ancf_jax.forces.AbstractKinkedForce`).
-  No contact while the closest point is beyond an end of the beam.
+  No contact while the closest point is beyond an end of the beam. Optional friction
+  along the beam (:class:`ContactFriction`): the regularized Coulomb law of sliding
+  joints, −μ F_n tanh(u/v_ε) − c u, u the point's speed relative to the beam's
+  material point under it.
+
+Both name the node crossings of their point (:func:`node_crossing_value`,
+:class:`~ancf_jax.forces.AbstractNodeCrossing`), located only with
+``RunOptions(locate_load_nodes=True)``: the forces are C¹ in time there, and locating
+them changes a run's error by under 1 % (docs/moving-loads.md).
 
 A moving *mass* is a point mass on a sliding joint whose arc length or horizontal
 position is prescribed (:meth:`ancf_jax.model.Model.moving_mass`): the sliding joint
@@ -58,10 +66,11 @@ import jax
 import jax.numpy as jnp
 import optimistix as optx
 
-from .forces import AbstractKinkedForce, AbstractLoad
+from .forces import AbstractKinkedForce, AbstractLoad, AbstractNodeCrossing
 from .functions import AbstractPath
 from .element.shape_functions import shape_functions, shape_functions_dx
 from .points import AbstractPoint, element_coordinates
+from .sliding import regularized_coulomb, reversal_kink
 
 #: most Newton steps of the searches on the deformed beam (from the linear interpolation
 #: in the node interval: the residual falls below 1e-14 m after 3 on the tests' wires)
@@ -142,13 +151,32 @@ def arc_length_under(system, beam: int, q, x):
 
 
 def _closest(system, beam: int, q, p):
-    """(s*, on the beam, element coordinates (4, 2), local arc length, element length)."""
+    """(s*, on the beam, element coordinates (4, 2), local arc length, element length,
+    s* before clamping to the element)."""
     e, length, s_k, u0 = _node_interval(system, beam, q, p[0])
     u = _closest_root(e, p, length, jax.lax.stop_gradient(u0))
     total = system.beams[beam].mesh.length
     on = (s_k + u >= 0.0) & (s_k + u <= total)
+    raw = s_k + u
     u = jnp.clip(u, 0.0, length)
-    return s_k + u, on, e, u, length
+    return s_k + u, on, e, u, length, raw
+
+
+def node_crossing_value(mesh, s):
+    """(−1)ᵏ f (1 − f) with ξ = k + f the global element coordinate of the reference arc
+    length s [m] (k the element holding s, f = (s − s_k)/l_k ∈ [0, 1); beyond the ends
+    the end elements extended, :meth:`~ancf_jax.mesh.BeamMesh.locate`), ξ clamped to
+    [½, n − ½] (n active elements). Continuous in s, exactly zero at the interior nodes
+    (ξ = 1 … n − 1), of one sign within each element and alternating from element to
+    element: its zero crossings are the node crossings of a point moving along the
+    beam. Constant within ½ element of the ends and beyond them: a point's entry or
+    exit, where a moving force jumps, is no crossing (located, such a jump stays
+    inside a substep, and the error of the run grows: docs/moving-loads.md)."""
+    k, x = mesh.locate(s)
+    xi = jnp.clip(k + x / mesh.element_lengths[k], 0.5, mesh.n_elements - 0.5)
+    j = jnp.floor(xi)
+    f = xi - j
+    return jnp.where(jnp.mod(j, 2.0) == 0.0, 1.0, -1.0) * f * (1.0 - f)
 
 
 def closest_arc_length(system, beam: int, q, p):
@@ -193,7 +221,7 @@ class AtHorizontalPosition(AbstractMovingLocation):
         return arc_length_under(system, beam, q, self.path(t))
 
 
-class MovingForce(AbstractLoad):
+class MovingForce(AbstractLoad, AbstractNodeCrossing):
     """A point force F·f(t) [N] (fixed direction) at a moving material point of beam
     ``beam`` (module docstring); zero while the point is off the beam.
 
@@ -225,8 +253,39 @@ class MovingForce(AbstractLoad):
         s, _ = self.location.locate(system, self.beam, q, t)
         return element_coordinates(system, self.beam, s)
 
+    def node_crossings(self, system, q, v, t):
+        """:func:`node_crossing_value` of the loaded point, shape (1,): zero at the
+        interior nodes, where the generalized force S(s)ᵀF is C¹ in time (the second
+        derivative of the shape functions jumps)."""
+        s, _ = self.location.locate(system, self.beam, q, t)
+        return jnp.reshape(node_crossing_value(system.beams[self.beam].mesh, s), (1,))
 
-class UnilateralContact(AbstractKinkedForce):
+
+class ContactFriction(eqx.Module):
+    """Regularized Coulomb friction at a :class:`UnilateralContact` (the law of sliding
+    joints, :func:`~ancf_jax.sliding.regularized_coulomb`):
+
+        F_t = −μ F_n tanh(u / v_ε) − c u  [N]   on the point along t̂, −F_t t̂ on the beam,
+
+    F_n the contact's normal force, t̂ = r′(s*)/|r′(s*)| the beam's unit tangent at the
+    contact point and u = t̂·(ṗ − ṙ(s*)) [m/s] the sliding speed of the point relative
+    to the beam's material point under it (ṙ at fixed s*). Zero while the contact is
+    open (penetration δ <= 0), the viscous part too. Its power F_t u <= 0 is
+    dissipation.
+
+    Attributes:
+        mu: friction coefficient μ >= 0.
+        regularization: v_ε [m/s] > 0 (a point held by friction creeps at
+            v_ε artanh(F/(μ F_n)) under a tangential load F < μ F_n).
+        viscous: c [N·s/m] >= 0.
+    """
+
+    mu: jnp.ndarray
+    regularization: jnp.ndarray
+    viscous: jnp.ndarray
+
+
+class UnilateralContact(AbstractKinkedForce, AbstractNodeCrossing):
     """Penalty contact between ``point`` and beam ``beam`` at the closest point
     (module docstring).
 
@@ -238,6 +297,7 @@ class UnilateralContact(AbstractKinkedForce):
         stiffness: k [N/m] > 0.
         damping: c [N·s/m] >= 0.
         offset: g₀ [m]: the gap at which contact begins (radii of wire and shoe).
+        friction: :class:`ContactFriction`, or None: frictionless.
     """
 
     point: AbstractPoint
@@ -246,19 +306,21 @@ class UnilateralContact(AbstractKinkedForce):
     stiffness: jnp.ndarray
     damping: jnp.ndarray
     offset: jnp.ndarray
+    friction: Optional[ContactFriction] = None
 
     def contact_point(self, system, q):
         """(s* [m], on_beam): the closest point of the beam to the contacting point."""
         return closest_arc_length(system, self.beam, q, self.point.position(system, q))
 
     def _gaps(self, system, q):
-        """(g, on the beam): the gap g = σ n̂·(p − r(s*)) − g₀ [m] (negative:
-        penetration) at the closest point, whether or not it is on the beam."""
+        """(g, on the beam, s* before clamping): the gap g = σ n̂·(p − r(s*)) − g₀ [m]
+        (negative: penetration) at the closest point, whether or not it is on the
+        beam."""
         p = self.point.position(system, q)
-        _, on, e, u, length = _closest(system, self.beam, q, p)
+        _, on, e, u, length, raw = _closest(system, self.beam, q, p)
         r1 = shape_functions_dx(u, length) @ e
         n = jnp.stack([-r1[1], r1[0]]) / jnp.linalg.norm(r1)
-        return self.side * jnp.dot(n, p - shape_functions(u, length) @ e) - self.offset, on
+        return self.side * jnp.dot(n, p - shape_functions(u, length) @ e) - self.offset, on, raw
 
     def gap(self, system, q):
         """g = σ n̂·(p − r(s*)) − g₀ [m] (negative: penetration), whether or not s* is
@@ -267,7 +329,7 @@ class UnilateralContact(AbstractKinkedForce):
 
     def _penetration(self, system, q):
         """δ = −g while the closest point is on the beam, else −1 m (open)."""
-        g, on = self._gaps(system, q)
+        g, on, _ = self._gaps(system, q)
         return jnp.where(on, -g, -1.0)
 
     def _state(self, system, q, v):
@@ -293,9 +355,45 @@ class UnilateralContact(AbstractKinkedForce):
     def applied_force(self, system, q, v, t):
         return jnp.zeros_like(q)
 
+    def _slip(self, system, q, v):
+        """(u [m/s], t̂ (2,), relative position p(q′) − r(q′; s*) as a function of q′ with
+        s* = s*(q) held): the sliding speed and tangent of :class:`ContactFriction`."""
+        p = self.point.position(system, q)
+        s, _, e, u, length, _ = _closest(system, self.beam, q, p)
+        r1 = shape_functions_dx(u, length) @ e
+        tangent = r1 / jnp.linalg.norm(r1)
+        beam = system.beams[self.beam]
+
+        def relative(qq):
+            return self.point.position(system, qq) - beam.position(system.beam_nodes(qq, self.beam), s)
+
+        _, rate = jax.jvp(relative, (q,), (v,))
+        return jnp.dot(tangent, rate), tangent, relative
+
+    def tangential_force(self, system, q, v):
+        """F_t [N] on the point along the beam's unit tangent t̂ (its reaction on the
+        beam), :class:`ContactFriction`; 0 without friction."""
+        if self.friction is None:
+            return jnp.zeros(())
+        u, _, _ = self._slip(system, q, v)
+        return self._friction_law(self._penetration(system, q), self.normal_force(system, q, v), u)
+
+    def _friction_law(self, delta, normal, u):
+        """F_t [N] of :class:`ContactFriction` at penetration δ, normal force F_n and
+        sliding speed u; zero while the contact is open (δ <= 0), viscous part
+        included."""
+        f = self.friction
+        return jnp.where(delta > 0.0, regularized_coulomb(normal, u, f.mu, f.regularization, f.viscous), 0.0)
+
     def dissipative_force(self, system, q, v):
-        _, grad, _, d = self._state(system, q, v)
-        return -d * grad
+        delta, grad, _, d = self._state(system, q, v)
+        out = -d * grad
+        if self.friction is not None:
+            u, tangent, relative = self._slip(system, q, v)
+            force = self._friction_law(delta, self.stiffness * jnp.maximum(delta, 0.0) + d, u)
+            _, vjp = jax.vjp(relative, q)
+            out = out + vjp(force * tangent)[0]
+        return out
 
     def coordinates(self, system, q, t):
         s, _ = self.contact_point(system, q)
@@ -304,7 +402,22 @@ class UnilateralContact(AbstractKinkedForce):
     def kinks(self, system, q, v):
         """δ [m] (contact closing or opening; the stiffness jumps from 0 to k, a damped
         contact's force by c δ̇) and k δ + c δ̇ [N] while δ > 0 (the force reaching
-        zero: the damper's limit), else k δ."""
+        zero: the damper's limit), else k δ; with friction, the reversal of the sliding
+        speed u while closed (:func:`~ancf_jax.sliding.reversal_kink`), else 0."""
         delta, _, rate, _ = self._state(system, q, v)
-        return jnp.stack([delta, jnp.where(delta > 0.0, self.stiffness * delta + self.damping * rate,
-                                           self.stiffness * delta)])
+        values = [delta, jnp.where(delta > 0.0, self.stiffness * delta + self.damping * rate, self.stiffness * delta)]
+        if self.friction is not None:
+            # the reversal of the sliding speed while in contact (friction's near-jump)
+            u, _, _ = self._slip(system, q, v)
+            values.append(jnp.where(delta > 0.0, reversal_kink(u, self.friction.regularization), 0.0))
+        return jnp.stack(values)
+
+    def node_crossings(self, system, q, v, t):
+        """Node crossings of the contact point while the contact is closed, shape (1,):
+        :func:`node_crossing_value` of s* (before clamping to the beam) times
+        max(δ, 0) [m], zero (no crossing) while the contact is open and carries no
+        force. The force is C¹ in s*; the beam's curvature, so the contact's
+        stiffness along the beam, jumps at the nodes."""
+        g, on, raw = self._gaps(system, q)
+        delta = jnp.where(on, -g, -1.0)
+        return jnp.reshape(node_crossing_value(system.beams[self.beam].mesh, raw) * jnp.maximum(delta, 0.0), (1,))

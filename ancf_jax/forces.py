@@ -362,6 +362,22 @@ class AbstractKinkedForce(AbstractForce, AbstractKinked):
     """A force element whose law has kinks (:class:`AbstractKinked`)."""
 
 
+class AbstractNodeCrossing(eqx.Module):
+    """A force element acting at a point that moves along a beam (a moving force, a
+    contact point): it names the point's node crossings as the zero crossings of
+    :meth:`node_crossings`, so that fixed steps can be split there
+    (:func:`node_crossing_values`, ``locate_load_nodes`` of
+    :class:`~ancf_jax.integrate.RunOptions`). Its force is C¹ in the point's arc length
+    at a node (only the curvature of the cubic elements jumps), so, unlike the kinks of
+    :class:`AbstractKinked`, these are not located by ``locate_crossings``
+    (docs/moving-loads.md: located, they change a run's error by under 1 %)."""
+
+    @abc.abstractmethod
+    def node_crossings(self, system, q, v, t):
+        """Values whose zero crossings are the point's node crossings at the state
+        (q, v) at time t [s], shape (k,), k fixed; continuous in (q, v, t)."""
+
+
 class AbstractOneSidedSpringDamper(AbstractKinkedForce):
     """A spring-damper between two points that acts on one side only: a rope, dropper or
     hanger (tension only) or a stop or buffer (compression only).
@@ -472,6 +488,24 @@ def kink_values(system, q, v):
     if not members:
         return None
     return jnp.concatenate([f.kinks(system, q, v) for f in members])
+
+
+def node_crossing_values(system, q, v, t):
+    """The :meth:`AbstractNodeCrossing.node_crossings` of the force elements of
+    ``system`` at time t [s], concatenated, shape (k,), or None when it has none."""
+    members = _crossing_points(system)
+    if not members:
+        return None
+    return jnp.concatenate([f.node_crossings(system, q, v, t) for f in members])
+
+
+def _crossing_points(system) -> list:
+    return [f for f in system.forces if isinstance(f, AbstractNodeCrossing)]
+
+
+def has_node_crossings(system) -> bool:
+    """Whether ``system`` has force elements with moving points (static)."""
+    return bool(_crossing_points(system))
 
 
 def _kinked(system) -> list:

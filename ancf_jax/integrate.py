@@ -34,6 +34,12 @@ loops; gradients by reverse mode need both off, which is the default of
 than taken from optimistix: its only bracketing root finder is bisection, which gains
 one bit per iteration, and every iteration is a full implicit step; Illinois reaches
 the node to a fraction 1e-9 of an element in ~6.
+
+Node crossings of moving forces and contact points (``locate_load_nodes``,
+:func:`ancf_jax.forces.node_crossing_values`) are located like kinks when asked for,
+not with ``locate_crossings``: those forces are C¹ in time there (docs/moving-loads.md
+measures under 1 % of a run's error), and every located crossing costs
+``crossing_iterations`` + 1 extra steps.
 """
 
 from __future__ import annotations
@@ -46,7 +52,7 @@ import numpy as np
 
 from .errors import ModelError
 from .failures import Failure
-from .forces import has_kinks, kink_values
+from .forces import has_kinks, has_node_crossings, kink_values, node_crossing_values
 from .integrators.base import AbstractIntegrator, Carry, StepInfo
 from ._control import run_if
 from .joints import SlidingJoint
@@ -88,6 +94,10 @@ class RunOptions(eqx.Module):
         locate_crossings: split steps at node crossings of sliding joints, at
             slack/taut transitions of one-sided spring-dampers and contacts, and at
             reversals of sliding friction.
+        locate_load_nodes: also split steps where a moving force's point or a closed
+            contact's point crosses an interior node of its beam: their forces are C¹
+            there, and locating them changes a run's error by under 1 %
+            (docs/moving-loads.md), so it is off.
         crossing_iterations: regula-falsi iterations to locate a crossing (1..50).
         max_halvings: when a step fails (Newton not converged, non-finite state,
             sliding jump), redo it in substeps, halving down to h / 2^max_halvings and
@@ -105,14 +115,16 @@ class RunOptions(eqx.Module):
     drift_tolerance: float = eqx.field(static=True, default=1e-6)
     max_sliding_step: float = eqx.field(static=True, default=0.5)
     locate_crossings: bool = eqx.field(static=True, default=False)
+    locate_load_nodes: bool = eqx.field(static=True, default=False)
     crossing_iterations: int = eqx.field(static=True, default=6)
     max_halvings: int = eqx.field(static=True, default=DEFAULT_HALVINGS)
 
     def __check_init__(self):
         check_positive("drift_tolerance", self.drift_tolerance, "m")
         check_positive("max_sliding_step", self.max_sliding_step, "element lengths")
-        if not isinstance(self.locate_crossings, (bool, np.bool_)):
-            raise ModelError(f"locate_crossings must be true or false, got {self.locate_crossings!r}")
+        for name in ("locate_crossings", "locate_load_nodes"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise ModelError(f"{name} must be true or false, got {getattr(self, name)!r}")
         check_count("crossing_iterations", self.crossing_iterations, 1, 50)
         check_count("max_halvings", self.max_halvings, 0, 30)
 
@@ -274,16 +286,20 @@ def _crossing(system, integrator, carry, new, h, context, options):
     law (see module doc).
 
     Returns (carry, StepInfo, crossed) for the completed step of size h."""
-    slides = sliding_beams(system)
-    kinked = has_kinks(system)
-    if not options.locate_crossings or not (slides or kinked):
+    slides = sliding_beams(system) if options.locate_crossings else {}
+    kinked = options.locate_crossings and has_kinks(system)
+    nodes_of_loads = options.locate_load_nodes and has_node_crossings(system)
+    if not (slides or kinked or nodes_of_loads):
         return new, None, jnp.array(False)
     js = list(slides)
 
     def values(c):
-        """The watched values g: sliding coordinates, then kink values."""
+        """The watched values g: sliding coordinates, then kink values, then node
+        crossings of moving loads (each group only where it is located)."""
         parts = [jnp.stack([system.sliding(c.q, j) for j in js])] if js else []
-        return jnp.concatenate(parts + ([kink_values(system, c.q, c.v)] if kinked else []))
+        parts += [kink_values(system, c.q, c.v)] if kinked else []
+        parts += [node_crossing_values(system, c.q, c.v, c.t)] if nodes_of_loads else []
+        return jnp.concatenate(parts)
 
     g0, g1 = values(carry), values(new)
     targets, crossings, kinks = [], [], []
@@ -297,7 +313,8 @@ def _crossing(system, integrator, carry, new, h, context, options):
         targets.append(nodes + jnp.sign(s1 - s0) * 1e-9 * lengths)
         crossings.append(k0 != k1)
         kinks.append(jnp.zeros(len(js), bool))
-    if kinked:
+    if kinked or nodes_of_loads:
+        # kinks and node crossings of moving loads alike
         e0, e1 = g0[len(js):], g1[len(js):]
         # just before the kink (KINK_MARGIN): the first substep ends on the side where
         # the law is smooth; the second straddles the kink by that margin. A value

@@ -37,7 +37,7 @@ from .bodies import RigidBodies
 from .element.laws import check_law
 from .element.strain_energy import Formulation
 from .errors import ConstraintError, ModelError, VelocityProjectionWarning
-from .contact import AtArcLength, AtHorizontalPosition, MovingForce, UnilateralContact
+from .contact import AtArcLength, AtHorizontalPosition, ContactFriction, MovingForce, UnilateralContact
 from .forces import (AbstractForceSet, BeamMassLoad, BodyMassLoad, CompressionOnlySpringDamper, DirectedSpringDamper,
                      NodeSpringSet, PointForce, PointTorque,
                      SpringDamper, TensionOnlySpringDamper)
@@ -642,6 +642,8 @@ class Model:
         if beam not in self._beams:
             raise ModelError(f"moving mass {name!r} refers to beam {beam!r}, which does not exist "
                              f"(beams: {', '.join(map(repr, self._beams)) or 'none'})")
+        if along == "x":
+            self._check_monotonic_x(beam, f'moving mass {name!r} along="x"', '"arc_length", or ')
         spec = self._beams[beam]
         nodes = np.asarray(spec.mesh.reference_nodes if spec.initial_nodes is None else spec.initial_nodes)
         lengths = np.asarray(spec.mesh.element_lengths)[: int(spec.mesh.n_elements)]
@@ -660,10 +662,13 @@ class Model:
         return name
 
     def contact(self, name: str, point: PointRef, beam: str, *, stiffness, damping=0.0, side: int = 1,
-                offset=0.0) -> str:
+                offset=0.0, mu=0.0, regularization=DEFAULT_REGULARIZATION, viscous=0.0) -> str:
         """Unilateral penalty contact between ``point`` and ``beam`` at the beam's
         closest point (:class:`~ancf_jax.contact.UnilateralContact`): normal force
-        k δ + max(c δ̇, −k δ) while the penetration δ > 0, else 0 (never pulls).
+        k δ + max(c δ̇, −k δ) while the penetration δ > 0, else 0 (never pulls); with
+        ``mu`` or ``viscous`` > 0, friction −μ F_n tanh(u / v_ε) − c u along the beam
+        (:class:`~ancf_jax.contact.ContactFriction`, the law of
+        :meth:`slider_friction`).
 
         Args:
             stiffness: k [N/m] > 0.
@@ -672,16 +677,23 @@ class Model:
                 beam running in +x), −1 if on the other side (below it: a pantograph
                 under a contact wire).
             offset: gap g₀ [m] >= 0 at which contact begins (radii).
+            mu: friction coefficient μ >= 0 (default 0: frictionless).
+            regularization: v_ε [m/s] > 0 of the friction (default 1e-3).
+            viscous: c [N·s/m] >= 0, viscous friction along the beam.
         """
         k = check_positive(f"stiffness of contact {name!r}", stiffness, "N/m")
         c = check_nonnegative(f"damping of contact {name!r}", damping, "N*s/m")
         g0 = check_nonnegative(f"offset of contact {name!r}", offset, "m")
+        mu = check_nonnegative(f"mu of contact {name!r}", mu)
+        ve = check_positive(f"regularization of contact {name!r}", regularization, "m/s")
+        cv = check_nonnegative(f"viscous of contact {name!r}", viscous, "N*s/m")
         if side not in (1, -1) or isinstance(side, bool):
             raise ModelError(f"side of contact {name!r} must be 1 (left of the beam, above a beam "
                              f"running in +x) or -1 (right, below), got {side!r}")
         self._claim(name, "force")
+        friction = dict(mu=mu, regularization=ve, viscous=cv) if mu > 0.0 or cv > 0.0 else None
         self._forces.append(("contact", name, dict(point=point, beam=beam, stiffness=k, damping=c,
-                                                   side=float(side), offset=g0)))
+                                                   side=float(side), offset=g0, friction=friction)))
         return name
 
     def lumped_chain(self, name: str, *, base, heights, masses, stiffness, damping=None,
@@ -862,6 +874,10 @@ class Model:
                 rotating(a["body"], what, "a rotation (torque)")
             if kind in ("moving_force", "contact"):
                 beam(a["beam"], what)
+            if kind == "moving_force" and a["along"] == "x":
+                self._check_monotonic_x(a["beam"], f'moving force {name!r} along="x"', '"arc_length", or ')
+            if kind == "contact":
+                self._check_monotonic_x(a["beam"], f"contact {name!r} (its search starts under the point's x)")
             if kind == "mass_proportional" and a["item"] not in self._beams and a["item"] not in self._bodies:
                 known = ", ".join(map(repr, beams + bodies)) or "none"
                 raise ModelError(f"{what} refers to {a['item']!r}, which is no beam or body "
@@ -872,6 +888,20 @@ class Model:
             for member, (pa, pb) in a.get("members", {}).items():
                 point(pa, f"member {member!r} of {what}")
                 point(pb, f"member {member!r} of {what}")
+
+    def _check_monotonic_x(self, beam: str, what: str, alternative: str = "") -> None:
+        """Moving loads along x and contacts find the element under a horizontal
+        position from the nodes' x: the x of the beam's initial shape must be strictly
+        monotonic along it (ModelError naming ``what`` otherwise)."""
+        spec = self._beams[beam]
+        nodes = np.asarray(spec.mesh.reference_nodes if spec.initial_nodes is None else spec.initial_nodes)
+        x = nodes[: int(spec.mesh.n_elements) + 1, 0]
+        dx = np.diff(x)
+        if not (np.all(dx > 0.0) or np.all(dx < 0.0)):
+            shown = ", ".join(f"{v:g}" for v in x[:8]) + (", ..." if len(x) > 8 else "")
+            raise ModelError(f"{what} needs beam {beam!r} to run left to right or right to left, but the x of its "
+                             f"nodes is not strictly monotonic (x = {shown} m); accepted: {alternative}a beam whose "
+                             f"node x increases or decreases along it (a track, rope or wire)")
 
     def build(self, *, pad_to: dict | int | None = None, hold: bool | None = None,
               assemble: bool = True, tolerance: float = ASSEMBLY_TOLERANCE,
@@ -1101,9 +1131,12 @@ class Model:
                 forces.append(MovingForce(name, beam_of(a["beam"]), where, jnp.asarray(a["force"], float),
                                           a["time_function"]))
             elif kind == "contact":
-                forces.append(UnilateralContact(name, resolve(a["point"], what), beam_of(a["beam"]), a["side"],
-                                                jnp.asarray(a["stiffness"], float),
-                                                jnp.asarray(a["damping"], float), jnp.asarray(a["offset"], float)))
+                fr = a["friction"]
+                forces.append(UnilateralContact(
+                    name, resolve(a["point"], what), beam_of(a["beam"]), a["side"], jnp.asarray(a["stiffness"], float),
+                    jnp.asarray(a["damping"], float), jnp.asarray(a["offset"], float),
+                    None if fr is None else ContactFriction(*(jnp.asarray(fr[k], float)
+                                                              for k in ("mu", "regularization", "viscous")))))
             elif kind == "directed_spring":
                 forces.append(DirectedSpringDamper(
                     name, resolve(a["a"], what), resolve(a["b"], what),

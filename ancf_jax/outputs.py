@@ -43,7 +43,7 @@ COMPONENTS = {
     "member": ("tension", "engaged"),
     "friction": ("force", "normal"),
     "drive": ("force",),
-    "contact": ("force", "gap", "engaged", "s"),
+    "contact": ("force", "gap", "engaged", "s", "friction"),
     "load": ("y", "x", "s", "on_beam"),
     "energy": ("kinetic", "gravity", "strain", "springs", "dissipated", "external", "constraint",
                "total", "balance_error"),
@@ -62,7 +62,7 @@ UNITS = {"node": {"x": "m", "y": "m", "slope_x": "-", "slope_y": "-"}, "point": 
          "stress": "Pa", "axial": {"force": "N", "strain": "-"},
          "bending": {"moment": "N*m", "curvature": "1/m"}, "reaction": {"normal": "N", "tangential": "N", "fx": "N", "fy": "N", "moment": "N*m"}, "member": {"tension": "N", "engaged": "-"},
          "friction": "N", "drive": "N", "energy": "J",
-         "contact": {"force": "N", "gap": "m", "engaged": "-", "s": "m"},
+         "contact": {"force": "N", "gap": "m", "engaged": "-", "s": "m", "friction": "N"},
          "load": {"y": "m", "x": "m", "s": "m", "on_beam": "-"}}
 
 
@@ -87,7 +87,9 @@ class Output:
             :meth:`~ancf_jax.results.Results.joint_moment`), ``"energy"``,
             ``"member"`` (force [N] and engaged state of a spring-damper named ``target``),
             ``"friction"`` (friction force and normal reaction [N] of a sliding
-            friction), ``"drive"`` (tangential force [N] of a sliding drive),
+            friction), ``"drive"`` (tangential force [N] of a sliding drive; the drive
+            ``NAME.drive`` of a moving mass: its horizontal force along x,
+            :meth:`~ancf_jax.results.Results.drive_force`),
             ``"contact"`` (normal force [N], gap [m], engaged state, contact arc length
             [m] of a unilateral contact), ``"load"`` (position y, x [m] and arc length
             s [m] of the beam point under a moving force, and whether it is on the beam).

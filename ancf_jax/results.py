@@ -102,11 +102,13 @@ def _moment_history(system: System, k: int, q, lam, t):
 
 @eqx.filter_jit
 def _contact_history(system: System, contact, q, v):
-    """(normal force [N], gap [m], engaged 0/1, contact arc length s* [m]) per row."""
+    """(normal force [N], gap [m], engaged 0/1, contact arc length s* [m], friction
+    force [N]) per row."""
     def one(qq, vv):
         s, _ = contact.contact_point(system, qq)
         return jnp.stack([contact.normal_force(system, qq, vv), contact.gap(system, qq),
-                          contact.engaged(system, qq).astype(qq.dtype), s])
+                          contact.engaged(system, qq).astype(qq.dtype), s,
+                          contact.tangential_force(system, qq, vv)])
     return jax.vmap(one)(q, v)
 
 
@@ -348,8 +350,10 @@ class Results:
 
     def contact(self, name: str) -> np.ndarray:
         """Normal force F_n [N] (>= 0), gap g [m] (negative: penetration), engaged state
-        (1: closed) and contact arc length s* [m] on the beam of a unilateral contact
-        named ``name`` (:class:`~ancf_jax.contact.UnilateralContact`), shape (N, 4)."""
+        (1: closed), contact arc length s* [m] on the beam and friction force F_t [N] on
+        the point along the beam's unit tangent (0 without friction) of a unilateral
+        contact named ``name`` (:class:`~ancf_jax.contact.UnilateralContact`), shape
+        (N, 5)."""
         f = self.force_element(name)
         if not isinstance(f, UnilateralContact):
             raise ModelError(f"force element {name!r} is not a contact")

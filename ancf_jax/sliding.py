@@ -55,6 +55,22 @@ DEFAULT_REGULARIZATION = 1e-3
 REVERSAL_BAND = 1e-2
 
 
+def regularized_coulomb(normal, speed, mu, regularization, viscous):
+    """Regularized Coulomb friction F = −μ N tanh(u / v_ε) − c u [N] against the sliding
+    speed u [m/s] under the normal force N [N] >= 0 (module docstring: v_ε the
+    regularization speed [m/s], c the viscous part [N·s/m]); its power F u <= 0. The law
+    of :class:`SlidingFriction` and of friction at a unilateral contact
+    (:class:`~ancf_jax.contact.ContactFriction`)."""
+    return -mu * normal * jnp.tanh(speed / regularization) - viscous * speed
+
+
+def reversal_kink(speed, regularization):
+    """The kink value of a friction reversal: the sliding speed u [m/s] outside the dead
+    band ±REVERSAL_BAND·v_ε, zero inside (module docstring)."""
+    band = REVERSAL_BAND * regularization
+    return speed - jnp.clip(speed, -band, band)
+
+
 def sliding_slope(system, beam: int, sliding: int, q):
     """r'(s) of beam ``beam`` at sliding coordinate ``sliding``, shape (2,)."""
     return SlidingPoint(beam, sliding).direction(system, q)
@@ -169,8 +185,7 @@ class SlidingFriction(AbstractReactionForce, AbstractKinked):
         """F [N] on the body along +s (class docstring)."""
         c = self._joint(system)
         u = sliding_speed(system, c.beam, c.sliding, q, v)
-        n = self.normal_force(system, q, lam)
-        return -self.mu * n * jnp.tanh(u / self.regularization) - self.viscous * u
+        return regularized_coulomb(self.normal_force(system, q, lam), u, self.mu, self.regularization, self.viscous)
 
     def generalized_force(self, system, q, v, t, lam):
         c = self._joint(system)
@@ -188,5 +203,4 @@ class SlidingFriction(AbstractReactionForce, AbstractKinked):
         ±μN): u outside the dead band ±REVERSAL_BAND·v_ε, zero inside, shape (1,)."""
         c = self._joint(system)
         u = sliding_speed(system, c.beam, c.sliding, q, v)
-        band = REVERSAL_BAND * self.regularization
-        return jnp.reshape(u - jnp.clip(u, -band, band), (1,))
+        return jnp.reshape(reversal_kink(u, self.regularization), (1,))

@@ -151,13 +151,16 @@ T_BOUNCE = 0.06
 
 def bounce_model():
     """A point mass falling (no gravity, speed V0) onto a rigid track (every node
-    clamped) from a gap GAP0, through a penalty contact k = K_C (damping set per run)."""
+    clamped, x from −0.5 to 1, a node at x = 0.25) from a gap GAP0, through a penalty
+    contact k = K_C (damping set per run). A moving force on the track, standing at
+    arc length 0.1 m (x = −0.4; speed 0: set per run), which the clamps take up."""
     m = Model(gravity=(0.0, 0.0))
     m.add_beam("track", mesh.straight((-0.5, 0.0), (1.0, 0.0), 1.0, 2), Section(2e11, 1e-4, 1e-8, 0.8))
     for i in range(3):
         m.clamp(f"c{i}", "track", i)
     m.add_point_mass("ball", mass=M_BALL, position=(0.1, GAP0), velocity=(0.0, -V0))
     m.contact("contact", body_point("ball"), "track", stiffness=K_C, damping=1.0)
+    m.moving_force("rider", "track", (0.0, -1.0), path=ConstantSpeed(0.1, 0.0), along="arc_length")
     return m.build()
 
 
@@ -192,10 +195,15 @@ def bounce_runs():
                           jnp.asarray(2 * zeta * np.sqrt(K_C * M_BALL), float))
         for h in STEPS:
             run = run_fixed(sys, state, GeneralizedAlpha().forward_only(), h, T_BOUNCE, chunk=60,
-                            options=RunOptions(locate_crossings=True))
+                            options=BOUNCE_OPTIONS)
             assert run.status == 0
             out[zeta, h] = run
     return out
+
+
+#: options of the bounce runs: contact events and node crossings of the contact point
+#: and the moving force located (the bounce itself crosses no node)
+BOUNCE_OPTIONS = RunOptions(locate_crossings=True, locate_load_nodes=True)
 
 
 def bounce_errors(run, zeta):
@@ -362,3 +370,143 @@ def test_speed_is_a_parameter_by_name_and_scenario_key():
     assert float(q.set(string, 4.0).forces[0].location.path.speed) == 4.0
     with pytest.raises(ModelError, match="no moving force, moving mass or chain named 'nothing'"):
         resolve(string, ["speed.nothing"])
+
+
+# ---------------------------------------------------------------------------- node crossings
+def test_node_crossing_value_changes_sign_at_interior_nodes_only():
+    """(−1)ᵏ f (1 − f) of the global element coordinate on an uneven mesh (elements of
+    lengths alternating 1:2, padded): exactly zero at the interior nodes, one sign
+    within each element, alternating, continuous, constant near and beyond the ends
+    (a point's entry and exit are no crossings)."""
+    from ancf_jax.contact import node_crossing_value
+    from .dynamics import uneven_arc
+
+    track = uneven_arc(5, 1.0, 1.2)
+    padded = mesh.through_points(np.asarray(track.reference_nodes)[:, :2], np.asarray(track.reference_nodes)[:, 2:],
+                                 n_max=8)
+    edges = np.asarray(padded.node_arc_lengths)[:6]
+    value = jax.jit(jax.vmap(lambda s: node_crossing_value(padded, s)))
+    assert np.all(np.asarray(value(jnp.asarray(edges[1:5]))) == 0.0)
+    s = np.linspace(-0.3, edges[-1] + 0.3, 4001)
+    g = np.asarray(value(jnp.asarray(s)))
+    changes = s[1:][np.sign(g[1:]) * np.sign(g[:-1]) < 0]
+    np.testing.assert_allclose(changes, edges[1:5], atol=2 * (s[1] - s[0]))
+    assert np.max(np.abs(np.diff(g))) < 2 * (s[1] - s[0]) / np.min(np.diff(edges))  # |dg/ds| <= 1 / l
+    mids = 0.5 * (edges[1:] + edges[:-1])
+    np.testing.assert_allclose(np.asarray(value(jnp.asarray(mids))), [0.25, -0.25, 0.25, -0.25, 0.25])
+    ends = np.asarray(value(jnp.asarray([-1.0, 0.0, edges[-1], edges[-1] + 1.0])))
+    np.testing.assert_allclose(ends, [0.25, 0.25, 0.25, 0.25])
+
+
+def test_node_crossings_of_a_contact_point_and_a_moving_force_are_located(bounce_runs):
+    """The undamped bounce with the ball also moving along the track at −5.9 m/s
+    (frictionless: its x is 0.1 − 5.9 t), and the moving force running at 13.7 m/s
+    along the arc length from x = −0.4: the track's node at x = 0 is crossed by the contact point at
+    t = 0.1/5.9 = 16.95 ms, in contact (closed from 10 to 41.42 ms), and by the force
+    at 0.4/13.7 = 29.20 ms. With h = 0.5 ms the located crossings are those of the
+    bounce standing still (bounce_runs: the contact's opening in step 83, and its
+    closing where round-off puts it) plus exactly the steps holding those two times,
+    34 and 59. The bounce programs are reused (speeds and state are data)."""
+    h = 5e-4
+    system, state = bounce_model()
+    k_rider = next(i for i, f in enumerate(system.forces) if f.name == "rider")
+    sys = eqx.tree_at(lambda s: (s.forces[0].damping, s.forces[k_rider].location.path.speed), system,
+                      (jnp.asarray(0.0, float), jnp.asarray(13.7, float)))
+    ball = system.body_offset(0)
+    moving = eqx.tree_at(lambda s: s.v, state, state.v.at[ball].set(-5.9))
+    run = run_fixed(sys, moving, GeneralizedAlpha().forward_only(), h, T_BOUNCE, chunk=60, options=BOUNCE_OPTIONS)
+    assert run.status == 0
+    np.testing.assert_allclose(run.q[:, ball], 0.1 - 5.9 * run.t, atol=1e-12)
+    crossed = [int(np.ceil(t / h)) for t in (0.1 / 5.9, 0.4 / 13.7)]
+    assert crossed == [34, 59]
+    standing = np.nonzero(bounce_runs[0.0, h].crossings)[0]
+    t_open = GAP0 / V0 + np.pi * np.sqrt(M_BALL / K_C)
+    assert int(np.ceil(t_open / h)) in standing and len(standing) <= 2
+    np.testing.assert_array_equal(np.nonzero(run.crossings)[0], np.sort(np.concatenate([standing, crossed])))
+
+
+def test_moving_loads_along_x_and_contacts_need_a_beam_monotonic_in_x():
+    """On a vertical mast (its nodes all at x = 2) a moving force or mass along x and a
+    contact are refused with one line naming the item, the beam and what is accepted,
+    when the item is added (moving mass) or at the start of build (before anything is
+    compiled); along the arc length they are accepted."""
+    from ancf_jax.errors import ModelError
+
+    def mast():
+        m = Model(gravity=(0.0, 0.0))
+        m.add_beam("mast", mesh.straight((2.0, 0.0), (0.0, 1.0), 1.0, 2), Section(1e9, 1e-4, 1e-9, 1.0))
+        m.add_point_mass("ball", mass=1.0, position=(2.5, 0.5))
+        return m
+
+    needs = r"needs beam 'mast' to run left to right or right to left, but the x of its nodes is not strictly " \
+            r"monotonic \(x = 2, 2, 2 m\); accepted: "
+    m = mast()
+    m.moving_force("P", "mast", (1.0, 0.0), path=ConstantSpeed(0.0, 1.0))
+    with pytest.raises(ModelError, match=r"^moving force 'P' along=\"x\" " + needs + '"arc_length", or a beam') as err:
+        m.build()
+    assert "\n" not in str(err.value)
+    with pytest.raises(ModelError, match=r"^moving mass 'M' along=\"x\" " + needs):
+        mast().moving_mass("M", "mast", mass=1.0, path=ConstantSpeed(2.0, 1.0))
+    m = mast()
+    m.contact("touch", body_point("ball"), "mast", stiffness=1e3)
+    with pytest.raises(ModelError, match=r"^contact 'touch' \(its search starts under the point's x\) " + needs
+                       + "a beam whose node x"):
+        m.build()
+    m = mast()
+    m.moving_force("P", "mast", (1.0, 0.0), path=ConstantSpeed(0.0, 1.0), along="arc_length")
+    m.moving_mass("M", "mast", mass=1.0, path=ConstantSpeed(0.2, 1.0), along="arc_length")
+    m._check_references()
+
+
+# ---------------------------------------------------------------------------- contact friction
+def test_contact_friction_against_coulomb_and_momentum():
+    """A 1 kg block resting on a straight beam (its penalty penetration m g / k, so
+    F_n = m g) slides at 2 m/s with μ = 0.3; the beam (1.6 kg) is held in y and
+    slope_y only, free along x, so the friction's reaction accelerates it. Closed form
+    of rigid-body Coulomb friction: the block decelerates at μ g until the relative
+    motion stops at t_s = v₀ / (μ g (1 + m/M)), then both move at m v₀ / (m + M); the
+    dissipated work is ½ m v₀² M / (m + M). The x-momentum of block and beam is
+    conserved (the reaction acts on the beam's material point). Measured at h = 1 ms:
+    block speed while sliding and momentum to round-off (3e-14), common speed 2.7e-6
+    m/s, dissipation and energy balance 1.6e-6 J (second order: 3.5e-7 J at 0.5 ms;
+    the regularization's creep, v_ε = 1 mm/s, adds about v_ε² π² / (12 μ g) = 3e-7 m
+    to the sliding distance). With a viscous part the force adds −c u in contact, and
+    it vanishes, viscous part included, once the block is lifted off."""
+    g, mu, k, mass, v0 = 9.81, 0.3, 1e5, 1.0, 2.0
+    m = Model(gravity=(0.0, -g))
+    m.add_beam("track", mesh.straight((0.0, 0.0), (1.0, 0.0), 2.0, 2), Section(2e11, 1e-4, 1e-8, 0.8))
+    for i in range(3):
+        m.coordinate(f"y{i}", node("track", i), "y", value=0.0)
+        m.coordinate(f"t{i}", node("track", i), "slope_y", value=0.0)
+    m.add_point_mass("block", mass=mass, position=(0.2, -mass * g / k), velocity=(v0, 0.0))
+    m.contact("contact", body_point("block"), "track", stiffness=k, mu=mu)
+    system, state = m.build()
+    run = run_fixed(system, state, GeneralizedAlpha().forward_only(), 1e-3, 0.6)
+    assert run.status == 0
+    res = Results(system, run.t, run.q, run.v, run.acc, run.lam, run.work, np.zeros(len(run.t)))
+    translation = np.zeros(system.n_coordinates)
+    translation[system.body_offset(0)] = 1.0
+    translation[np.asarray(system.chain_indices())[0::4]] = 1.0      # every node's x
+    mass_matrix = np.asarray(system.mass_matrix())
+    beam_mass = translation @ mass_matrix @ translation - mass
+    assert beam_mass == pytest.approx(1.6, rel=1e-12)
+    momentum = run.v @ (mass_matrix @ translation)
+    np.testing.assert_allclose(momentum, mass * v0, rtol=1e-12)
+    t, block = res.t, run.v[:, system.body_offset(0)]
+    t_stop = v0 / (mu * g * (1 + mass / beam_mass))
+    sliding, together = t < t_stop - 0.01, t > t_stop + 0.05
+    np.testing.assert_allclose(block[sliding], v0 - mu * g * t[sliding], atol=1e-12)
+    contact = res.contact("contact")
+    np.testing.assert_allclose(contact[sliding, 0], mass * g, rtol=1e-12)
+    np.testing.assert_allclose(contact[sliding, 4], -mu * mass * g, rtol=1e-12)
+    np.testing.assert_allclose(block[together], mass * v0 / (mass + beam_mass), atol=5e-6)
+    energy = res.energy()
+    dissipated = 0.5 * mass * v0**2 * beam_mass / (mass + beam_mass)
+    assert energy["dissipated"][-1] == pytest.approx(dissipated, abs=3e-6)
+    assert np.max(np.abs(energy["balance_error"])) < 3e-6
+    # with a viscous part c = 1 N·s/m: −μ m g − c v₀ in contact, nothing once lifted
+    k_contact = next(i for i, f in enumerate(system.forces) if f.name == "contact")
+    viscous = eqx.tree_at(lambda s: s.forces[k_contact].friction.viscous, system, jnp.asarray(1.0))
+    force = jax.jit(lambda q: viscous.forces[k_contact].tangential_force(viscous, q, state.v))
+    assert float(force(state.q)) == pytest.approx(-mu * mass * g - v0, rel=1e-12)
+    assert float(force(state.q.at[system.body_offset(0) + 1].set(0.01))) == 0.0

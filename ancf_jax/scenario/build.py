@@ -256,8 +256,10 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
                 m.moving_force(name, f.beam, f.force, path=path_of(f), along=f.along,
                                time_function=f.time_function)
             elif f.type == "contact":
+                fr = {} if f.friction is None else dict(mu=f.friction.mu, regularization=f.friction.regularization,
+                                                        viscous=f.friction.viscous)
                 m.contact(name, point_ref(spec, lengths, f.point), f.beam, stiffness=f.stiffness,
-                          damping=f.damping, side=f.side, offset=f.offset)
+                          damping=f.damping, side=f.side, offset=f.offset, **fr)
             else:
                 m.spring_damper(name, point_ref(spec, lengths, f.a), point_ref(spec, lengths, f.b),
                                 stiffness=f.stiffness, damping=f.damping, rest_length=f.rest_length,
@@ -321,6 +323,8 @@ def make_outputs(spec: S.ScenarioSpec) -> list[Output]:
         elif o.type == "reaction":
             out.append(Output(name, "reaction", o.joint,
                               o.component if o.component is not None else str(o.index)))
+        elif o.type == "drive" and o.moving_mass is not None:
+            out.append(Output(name, "drive", f"{o.moving_mass}.drive", o.component))
         elif o.type in ("friction", "drive"):
             out.append(Output(name, o.type, f"{o.joint}.{o.type}", o.component))
         elif o.type in ("member", "contact", "load"):

@@ -467,21 +467,24 @@ class Checker:
                 if f.point.beam == f.beam:
                     raise Invalid(path + ("point",), f'a point of beam "{f.beam}" cannot contact that beam',
                                   "a body point, a ground point or a point of another beam")
+                self.monotonic(path + ("beam",), f.beam, "a contact (its search starts under the point's x)",
+                               "a beam running left to right or right to left (a track, rope or wire)")
             else:
                 self.point(path + ("a",), f.a)
                 self.point(path + ("b",), f.b)
                 if f.type == "spring_damper":
                     self.apart(path, f.a, f.b)
 
-    def monotonic(self, path, beam):
-        """along = "x" needs a beam whose initial x is strictly monotonic along it."""
+    def monotonic(self, path, beam, needs='along = "x"',
+                  accepted='"arc_length", or a beam running left to right or right to left (a track, rope or wire)'):
+        """along = "x" (and a contact) needs a beam whose initial x is strictly
+        monotonic along it."""
         x = self.initial_x(beam)
         dx = np.diff(x)
         if not (np.all(dx > 0.0) or np.all(dx < 0.0)):
-            raise Invalid(path, f'along = "x" needs a beam whose x is monotonic along it; the nodes of '
+            raise Invalid(path, f'{needs} needs a beam whose x is monotonic along it; the nodes of '
                           f'beam "{beam}" are at x = {", ".join(f"{v:g}" for v in x[:8])}'
-                          + (", ..." if len(x) > 8 else ""),
-                          '"arc_length", or a beam running left to right or right to left (a track, rope or wire)')
+                          + (", ..." if len(x) > 8 else ""), accepted)
 
     def initial_x(self, beam) -> np.ndarray:
         """x [m] of the nodes of a beam's initial shape (a catenary: its ends)."""
@@ -652,8 +655,20 @@ class Checker:
                     raise Invalid(path + ("index",), f'joint "{o.joint}" has {size} equations',
                                   f"an integer 0 .. {size - 1}")
 
+            elif o.type == "drive" and o.joint is None:
+                self.exclusive(path, o, ("joint", "moving_mass"), required=True)
+                if o.moving_mass not in self.spec.moving_masses:
+                    raise Invalid(path + ("moving_mass",), f'"{o.moving_mass}" is not a moving mass',
+                                  f"the name of a moving mass: {_names(self.spec.moving_masses)}")
             elif o.type in ("friction", "drive"):
+                if o.type == "drive":
+                    self.exclusive(path, o, ("joint", "moving_mass"))
                 self.joint(path + ("joint",), o.joint, ("sliding",))
+                if o.type == "drive" and o.joint in self.made_sliders:
+                    mass = self.made_sliders[o.joint]
+                    raise Invalid(path + ("joint",), f'sliding joint "{o.joint}" is moving mass "{mass}"\'s: '
+                                  f'its drive is named by moving_mass = "{mass}"',
+                                  "a sliding joint with a drive table, or moving_mass = NAME")
                 if o.joint in self.made_sliders or getattr(self.spec.joints[o.joint], o.type) is None:
                     raise Invalid(path + ("joint",), f'sliding joint "{o.joint}" has no {o.type}',
                                   f"a sliding joint with a {o.type} table")

@@ -47,7 +47,7 @@ TABLES = [
     ('`[joints.NAME]` with `type = "revolute"`', S.RevoluteSpec),
     ('`[joints.NAME]` with `type = "fixed"`', S.FixedSpec),
     ('`[joints.NAME]` with `type = "sliding"`', S.SlidingSpec),
-    ("`[joints.NAME.friction]` (sliding joints)", S.FrictionSpec),
+    ("`[joints.NAME.friction]` (sliding joints) and `[loads.NAME.friction]` (contacts)", S.FrictionSpec),
     ("`[joints.NAME.drive]` (sliding joints)", S.DriveSpec),
     ('`[joints.NAME]` with `type = "prescribed_point"`', S.PrescribedPointSpec),
     ('`[joints.NAME]` with `type = "prescribed_body"`', S.PrescribedBodySpec),

@@ -290,9 +290,10 @@ class FixedSpec(Table):
 
 
 class FrictionSpec(Table):
-    """Regularized Coulomb friction on a sliding joint: F = −μ N tanh(u/v_ε) − c u on the
-    body along the beam, N the joint's normal reaction, u the sliding speed (named
-    ``JOINT.friction``)."""
+    """Regularized Coulomb friction along a beam: F = −μ N tanh(u/v_ε) − c u, u the
+    sliding speed; on a sliding joint (named ``JOINT.friction``) N is the joint's normal
+    reaction and F acts on the body, on a contact N is the contact's normal force and F
+    acts on the point."""
 
     mu: float = key(unit="-", ge=0.0, allow_inf_nan=False, doc="friction coefficient μ")
     regularization: float = key(DEFAULT_REGULARIZATION, unit="m/s", gt=0.0, allow_inf_nan=False,
@@ -441,7 +442,8 @@ class ContactSpec(Table):
     """Unilateral penalty contact between a point and a beam at the beam's closest point:
     normal force k δ + max(c δ̇, −k δ) while the penetration δ > 0, else 0 (it never pulls);
     gap g = side·n̂·(p − r(s*)) − offset, n̂ the beam's left normal. No contact while the
-    closest point is beyond an end of the beam."""
+    closest point is beyond an end of the beam. The beam's x must be monotonic along it
+    (the search starts under the point's x)."""
 
     type: Literal["contact"] = key(doc="load type")
     point: PointRef = key(doc="the contacting point (e.g. the head of a chain: { body = \"pan.2\" })")
@@ -452,6 +454,7 @@ class ContactSpec(Table):
                             "(above a beam running in +x), -1 the other (below: a pantograph under a wire)")
     offset: float = key(0.0, unit="m", ge=0.0, allow_inf_nan=False,
                         doc="g₀, the gap at which contact begins (radii)")
+    friction: Optional[FrictionSpec] = key(None, doc="Coulomb friction along the beam (default none)")
 
 
 Load = Annotated[Union[PointForceSpec, TorqueSpec, SpringDamperSpec, MassProportionalSpec, MovingForceSpec,
@@ -841,20 +844,26 @@ class FrictionOutput(Table):
 
 
 class DriveOutput(Table):
-    """The drive force of a sliding joint on its body along +s."""
+    """The drive force of a sliding joint on its body along +s (``joint``), or of a
+    moving mass (``moving_mass``; its drive NAME.drive): along = "x", the horizontal
+    force [N] on the mass; along = "arc_length", the force on it along +s. Exactly one
+    of joint and moving_mass."""
 
     type: Literal["drive"] = key(doc="output type")
-    joint: str = key(doc="sliding joint name (with a drive)")
+    joint: Optional[str] = key(None, doc="sliding joint name (with a drive table)")
+    moving_mass: Optional[str] = key(None, doc="moving mass name")
     component: Literal[COMPONENTS["drive"]] = key("force", unit="N", doc="the force")
 
 
 class ContactOutput(Table):
     """The normal force of a contact (>= 0), its gap g (negative: penetration), its
-    engaged state (1: closed) or the arc length s* of the closest point on the beam."""
+    engaged state (1: closed), the arc length s* of the closest point on the beam, or
+    its friction force on the point along the beam's tangent."""
 
     type: Literal["contact"] = key(doc="output type")
     load: str = key(doc="contact name (in [loads])")
-    component: Literal[COMPONENTS["contact"]] = key("force", unit="N, m, -, m", doc="force, gap, state or arc length")
+    component: Literal[COMPONENTS["contact"]] = key("force", unit="N, m, -, m, N",
+                                                    doc="force, gap, state, arc length or friction")
 
 
 class LoadOutput(Table):

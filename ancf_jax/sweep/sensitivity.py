@@ -104,11 +104,15 @@ def local_sensitivities(model, keys, points, output: str, reduce: str = "max", *
     layout = problem.layout([Measurements.from_arrays(grid, np.zeros_like(grid))])
 
     def value(p):
+        """(y, y): the reduced output twice, so that ``jacfwd(..., has_aux=True)``
+        returns its value from the same traced run as its derivatives (one run in
+        the compiled program, not a separate primal one)."""
         y, ok = simulate_output(problem.system, problem.state, problem.solver, layout, p)
-        return jnp.where(ok, _reduce(y, reduce), jnp.nan)
+        y = jnp.where(ok, _reduce(y, reduce), jnp.nan)
+        return y, y
 
-    f = jax.jit(jax.vmap(lambda p: (value(p), jax.jacfwd(value)(p))))
-    vals, jac = (np.asarray(a) for a in f(jnp.asarray(points)))
+    f = jax.jit(jax.vmap(jax.jacfwd(value, has_aux=True)))
+    jac, vals = (np.asarray(a) for a in f(jnp.asarray(points)))
     grads = {k: jac[:, i] for i, k in enumerate(keys)}
     return dict(values=vals, gradients=grads,
                 normalized={k: grads[k] * points[:, i] / vals for i, k in enumerate(keys)})

@@ -41,7 +41,7 @@ def test_the_documented_example_validates_without_building(tmp_path, no_build):
     assert [(o.name, o.kind, o.target, o.component) for o in sc.outputs] == [
         ("contact_force", "contact", "touch", "force"), ("gap", "contact", "touch", "gap"),
         ("under_load", "load", "P", "y"), ("head_y", "body", "pan.2", "y"),
-        ("wagon_s", "sliding", "wagon.slider", "s")]
+        ("wagon_s", "sliding", "wagon.slider", "s"), ("wagon_drive", "drive", "wagon.drive", "force")]
 
 
 def test_the_example_builds_into_the_system_the_file_describes(tmp_path):
@@ -95,6 +95,21 @@ def test_the_example_builds_into_the_system_the_file_describes(tmp_path):
     assert q[system.sliding_offset] == pytest.approx(0.1 / 1.001, abs=1e-12)
 
 
+def test_contact_friction_table_builds_a_contact_friction(tmp_path):
+    """[loads.NAME.friction] of a contact (the sliding joints' friction table) makes its
+    ContactFriction; without it the contact is frictionless."""
+    from ancf_jax.contact import ContactFriction
+
+    text = _text(("side = -1", "side = -1\n\n[loads.touch.friction]\nmu = 0.2\nregularization = 2e-3"))
+    system, _ = load_scenario(str(write(tmp_path, text))).model().build(assemble=False)
+    touch = next(f for f in system.forces if f.name == "touch")
+    assert isinstance(touch.friction, ContactFriction)
+    assert [float(v) for v in (touch.friction.mu, touch.friction.regularization, touch.friction.viscous)] == [
+        0.2, 2e-3, 0.0]
+    plain, _ = load_scenario(str(write(tmp_path, EXAMPLE))).model().build(assemble=False)
+    assert next(f for f in plain.forces if f.name == "touch").friction is None
+
+
 def test_moving_mass_along_the_arc_length_drives_its_sliding_joint(tmp_path):
     sc = load_scenario(str(write(tmp_path, EXAMPLE)), ['moving_masses.wagon.along="arc_length"',
                                                        'loads.P.along="arc_length"'])
@@ -138,8 +153,19 @@ CASES = [
      "loads.P.along", '"x", "arc_length"'),
     ("moving force along x on a vertical beam", _text(('beam = "wire"\nforce', 'beam = "mast"\nforce'),
                                                      extra=VERTICAL), "loads.P.along", '"arc_length"'),
+    ("contact with a vertical beam", _text(('beam = "wire"\nstiffness', 'beam = "mast"\nstiffness'), extra=VERTICAL),
+     "loads.touch.beam", "a beam running left to right or right to left"),
     ("moving force profile outside the safe set", _text(("speed = 5.0\n", 'speed = 5.0\nprofile = "open(1)"\n')),
      "loads.P.profile", "an expression in t"),
+    ("drive output naming a missing moving mass", _text(('moving_mass = "wagon" }', 'moving_mass = "wagen" }')),
+     "outputs.columns.wagon_drive.moving_mass", 'the name of a moving mass: "wagon"'),
+    ("drive output naming a moving mass's slider", _text(('moving_mass = "wagon" }', 'joint = "wagon.slider" }')),
+     "outputs.columns.wagon_drive.joint", "moving_mass = NAME"),
+    ("drive output naming a joint and a moving mass", _text(('moving_mass = "wagon" }',
+                                                             'moving_mass = "wagon", joint = "wagon.slider" }')),
+     "outputs.columns.wagon_drive.moving_mass", "one of joint, moving_mass"),
+    ("drive output naming nothing", _text(('{ type = "drive", moving_mass = "wagon" }', '{ type = "drive" }')),
+     "outputs.columns.wagon_drive", "one of joint, moving_mass"),
     ("zero moving mass", _text(("mass = 0.05", "mass = 0.0")), "moving_masses.wagon.mass", "a number > 0 [kg]"),
     ("moving mass leaving the beam", _text(("start = 0.1\nspeed = 2.0", "start = 0.1\nspeed = 20.0")),
      "moving_masses.wagon.speed", "x in 0 .. 1.001 [m] at every output time"),
@@ -195,3 +221,57 @@ def test_bad_moving_load_input_gives_one_line_naming_the_key(tmp_path, no_build,
     assert err.value.key == path
     assert "(accepted: " in msg and msg.endswith(")")
     assert accepted in err.value.accepted, msg
+
+
+INCLINE = """
+name = "incline"
+gravity = [0.0, -9.81]
+
+[beams.track]                  # a rigid incline: every node clamped, slope angle 0.3 rad
+geometry = { type = "straight", start = [0.0, 0.0], direction = [0.955336489125606, -0.29552020666133955], length = 2.0 }
+elements = 2
+section = { EA = 2e7, EI = 2e2, mass_per_length = 0.8 }
+
+[joints.c0]
+type = "clamp"
+beam = "track"
+node = 0
+
+[joints.c1]
+type = "clamp"
+beam = "track"
+node = 1
+
+[joints.c2]
+type = "clamp"
+beam = "track"
+node = 2
+
+[moving_masses.cart]
+beam = "track"
+mass = 3.0
+start = 0.3
+speed = 2.0
+
+[solver]
+dt = 0.01
+t_end = 0.03
+
+[outputs.columns]
+drive = { type = "drive", moving_mass = "cart" }
+"""
+
+
+def test_drive_output_of_a_moving_mass(tmp_path):
+    """The drive output of a moving mass driven along x at constant speed on a rigid
+    incline (slope angle β = 0.3, frictionless): the horizontal force −m g tan β that
+    balances the weight's part the track does not carry (as the Python API's
+    Results.drive_force("cart.drive"), tests/test_moving_loads.py)."""
+    from ancf_jax.outputs import evaluate
+
+    sc = load_scenario(str(write(tmp_path, INCLINE)))
+    (o,) = sc.outputs
+    assert (o.kind, o.target, o.unit) == ("drive", "cart.drive", "N")
+    c = evaluate(sc.simulate(progress=False), sc.outputs)
+    assert len(c["drive"]) == 4
+    np.testing.assert_allclose(c["drive"], -3.0 * 9.81 * np.tan(0.3), rtol=1e-8)
