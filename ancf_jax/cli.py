@@ -264,7 +264,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="measured samples with columns t,y (optional w: weights); repeat for a "
                           "batch of data sets fitted under one vmap")
     fit.add_argument("--params", default="alpha,beta",
-                     help="parameters to fit, comma-separated: alpha, beta, E, tip_mass (default alpha,beta)")
+                     help="parameters to fit, comma-separated: alpha, beta, E, tip_mass, speed.NAME, or any real "
+                          "scalar of the scenario by its dotted key (beams.beam.section.I, gravity[1]) "
+                          "(default alpha,beta)")
     fit.add_argument("--init", action="append", default=[], metavar="NAME=VALUE,...",
                      help="initial values, e.g. alpha=0.01,beta=1e-5 (default: the model's); repeat "
                           "for several starts fitted under one vmap")

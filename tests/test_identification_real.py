@@ -12,6 +12,8 @@ bootstrap's spread against the Gauss–Newton standard errors.
 """
 
 import json
+import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -190,8 +192,7 @@ def test_discretization_check_catches_step_bias(plain):
     −0.8 × (estimate − truth), up to the noise (its standard error). The refinement loop
     itself (refit at 1 ms, recheck within the limit, coverage over 20 seeds) is measured
     in benchmarks/identification_coverage.py, as it needs two more compiled programs."""
-    fine = plain.refined(step=4)
-    _, clean = synthesize(fine, {"alpha": 0.02, "beta": 0.0}, noise=0.0, rate=RATE)
+    _, clean = synthesize(plain.refined(step=4), {"alpha": 0.02, "beta": 0.0}, noise=0.0, rate=RATE)
     t = np.arange(len(clean)) / RATE
     sigma = 2e-5
     rec = Measurements.from_arrays(t, clean + sigma * np.random.default_rng(5).standard_normal(len(t)),
@@ -258,3 +259,138 @@ def test_cli_fit_with_nuisance_and_noise(problem, record, tmp_path, capsys):
     assert main(["fit", "m1", "--data", str(path), "--nuisance", "delay"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "unknown nuisance parameter 'delay'" in err
+
+
+# ---------------------------------------------------------------------------- any scenario key
+#: a positive key (EI through I: fitted on log I), a negative one (gravity's y: fitted
+#: on g itself) and a named kind, in one problem
+KEYS = ("beams.beam.section.I", "gravity[1]", "alpha")
+
+
+@pytest.fixture(scope="module")
+def keyed():
+    return Problem.from_scenario("m1", KEYS, elements=ELEMENTS, t_end=T_END, dt=DT)
+
+
+def _rebuilt(values: dict, t):
+    """Reference: M1 rebuilt from the scenario with the keys set by ``--set`` overrides
+    (not by the probed map under test), run by the (α, β) problem's program."""
+    pr = Problem.from_scenario("m1", ("alpha", "beta"), elements=ELEMENTS, t_end=T_END, dt=DT,
+                               overrides=[f"beams.beam.section.I={float(values['beams.beam.section.I'])!r}",
+                                          f"gravity=[0.0, {float(values['gravity[1]'])!r}]"])
+    probe = Measurements.from_arrays(t, np.zeros_like(t))
+    grid, y, ok = pr.curves(pr.vector({"alpha": float(values["alpha"]), "beta": 0.0}), [probe],
+                            program="jacobian")
+    assert ok[0]
+    return np.interp(t, grid, y[0])
+
+
+def test_scenario_keys_jacobian_against_rebuilt_differences(keyed):
+    """∂(tip y)/∂I and ∂(tip y)/∂g_y by forward mode through the probed key map against
+    central differences of runs of the scenario *rebuilt* at I ± δ and g_y ± δ,
+    Richardson-extrapolated (δ = 1e-3 of the value, as the α gradient test: truncation
+    O(δ²) removed, Newton noise about 1e-8 relative left)."""
+    assert [p.kind for p in keyed.params] == ["key", "key", "alpha"]
+    assert keyed.units == ("m⁴", "m/s²", "1/s")
+    assert keyed.log_scaled.tolist() == [True, False, True]
+    t = np.arange(501) / RATE
+    probe = Measurements.from_arrays(t, np.zeros_like(t))
+    p0 = keyed.vector({"alpha": ALPHA})
+    base = dict(zip(KEYS, p0))
+    r, jac, *_ = keyed.evaluate(p0, [probe])
+    np.testing.assert_allclose(r[0] * np.sqrt(len(t)), _rebuilt(base, t), rtol=0, atol=1e-13)
+    for k, key in enumerate(KEYS[:2]):
+        def central(step):
+            hi, lo = dict(base), dict(base)
+            hi[key] += step
+            lo[key] -= step
+            return (_rebuilt(hi, t) - _rebuilt(lo, t)) / (2 * step)
+        h = 1e-3 * abs(base[key])
+        coarse, fine = central(h), central(h / 2)
+        richardson = (4 * fine - coarse) / 3
+        exact = jac[0][:, k] * np.sqrt(len(t))  # r = (y_sim - 0) / sqrt(N)
+        scale = np.max(np.abs(exact))
+        assert scale > 0
+        assert np.max(np.abs(richardson - exact)) <= 1e-6 * scale, (key, np.max(np.abs(richardson - exact)) / scale)
+
+
+def test_scenario_keys_recovered_from_a_rebuilt_model(keyed):
+    """Noise-free data from M1 rebuilt with EI 20 % higher, g_y = −9.0 m/s² and
+    α = 0.03 (independent of the probed map), fitted from the scenario's values: every
+    key recovered to 1e-6 relative; fit.json carries the keys' units."""
+    truth = {"beams.beam.section.I": 1.2 * 4.909e-14, "gravity[1]": -9.0, "alpha": 0.03}
+    t = np.arange(501) / RATE
+    data = Measurements.from_arrays(t, _rebuilt(truth, t), source="rebuilt M1")
+    res = fit(keyed, data, {"alpha": ALPHA})
+    assert res.converged, res.stop_reason
+    for name, value in zip(res.names, res.estimates):
+        assert value == pytest.approx(truth[name], rel=1e-6), name
+    d = res.to_dict()
+    assert d["units"]["beams.beam.section.I"] == "m⁴" and d["units"]["gravity[1]"] == "m/s²"
+    json.dumps(d)
+
+
+_DIAMETER_SECTION = """
+[beams.beam.section]
+E = 200e9
+diameter = 1e-3
+density = 7850.0
+"""
+
+
+def test_scenario_key_probe_is_the_rebuilt_model(tmp_path):
+    """The probed polynomial map against the scenario rebuilt at a value between and
+    beyond the probes: a diameter-only section (A = πd²/4, I = πd⁴/64: degrees 2 and
+    4) and a beam length (node coordinates of the initial state: degree 1)."""
+    import jax
+    from ancf_jax.identification import parameters as P
+    from ancf_jax.scenario import load_scenario
+
+    text = (Path(load_scenario("m1").path).read_text().split("[beams.beam.section]")[0]
+            + _DIAMETER_SECTION + "\n[bodies.tip]" + Path(load_scenario("m1").path).read_text()
+            .split("[bodies.tip]")[1])
+    path = tmp_path / "m1_diameter.toml"
+    path.write_text(text)
+    for source, key, other in ((path, "beams.beam.section.diameter", 1.37e-3),
+                               ("flexible_pendulum", "beams.pendulum.geometry.length", 1.91)):
+        sc = load_scenario(source, ["beams.beam.elements=3"] if source == path else
+                           ["beams.pendulum.elements=4"])
+        system, state = sc.build()
+        (par,) = P.resolve(system, [key], state=state, scenario=sc)
+        degrees = dict(zip(par.probe.paths, par.probe.degrees))
+        if source == path:
+            assert degrees == {"[0].beams[0].section.area": 2, "[0].beams[0].section.second_moment": 4,
+                               "[0].beams[0].section.fibre_distance": 1,
+                               "[0].beams[0].section.mass_per_length": 2}, degrees
+        else:
+            assert set(degrees) == {"[0].beams[0].mesh.element_lengths", "[0].beams[0].mesh.reference_nodes",
+                                    "[1].q"} and set(degrees.values()) == {1}, degrees
+        mapped = jax.tree.leaves(par.apply(system, state, other))
+        rebuilt = jax.tree.leaves(P._build_at(sc, key, other))
+        for a, b in zip(mapped, rebuilt):
+            np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("key,needle", [
+    ("beams.beam.elements", "integer key (= 3) changes the model's shapes"),
+    ("solver.dt", "changes nothing in the built model"),
+    ("bodies.tip.position", "not a number in this scenario"),
+    ("gravity[2]", "the index must be 0 to 1"),
+    ("beams.beam.geometry.length", "cannot be built at beams.beam.geometry.length = 0.3618"),
+    ("beams.beam.nonsense", "no key 'nonsense' in this table"),
+])
+def test_scenario_keys_that_cannot_be_parameters(key, needle):
+    with pytest.raises(ModelError, match=re.escape(needle)):
+        Problem.from_scenario("m1", (key,), elements=ELEMENTS, t_end=T_END, dt=DT)
+
+
+def test_scenario_key_through_the_static_equilibrium_is_refused():
+    """hanging_chain starts from its static equilibrium: the initial state depends on
+    the cable's weight through the static solve, not polynomially: refused, naming it;
+    a key without its scenario too."""
+    with pytest.raises(ModelError, match=re.escape("depends on it through [1].q")):
+        Problem.from_scenario("hanging_chain", ("beams.chain.section.mass_per_length",), output="mid_y",
+                              overrides=["beams.chain.elements=4"], t_end=0.1)
+    sc_system, sc_state = __import__("ancf_jax.scenario", fromlist=["x"]).load_scenario("m1").build()
+    with pytest.raises(ModelError, match="without its scenario"):
+        Problem(sc_system, sc_state, ("beams.beam.section.I",), dt=DT, t_end=T_END)

@@ -173,10 +173,11 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
     if method not in METHODS and optimizer is None:
         raise ModelError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     B = len(p0)
-    islog = np.arange(len(names)) < problem.n_physical
+    islog = problem.log_scaled
     bound = np.array([problem.max_time_offset if n == "time_offset" else math.inf for n in names])
-    if use_optax and problem.nuisance:
-        raise ModelError("nuisance parameters (time_offset, offset, gain) are fitted by method 'lm' only")
+    if use_optax and not islog[mask].all():
+        raise ModelError("nuisance parameters (time_offset, offset, gain) and parameters at values <= 0 "
+                         "are fitted by method 'lm' only (optax steps log p)")
     bad = np.argwhere(p0[:, mask & islog] <= 0)
     if bad.size:
         n = [x for x, k in zip(names, mask & islog) if k][bad[0][1]]

@@ -53,6 +53,7 @@ class JointProblem:
         self.max_time_offset, self.dt, self.elements = first.max_time_offset, first.dt, first.elements
         self.name = " + ".join(p.name for p in problems)
         self.names, self.units, self.n_physical = names, first.units, first.n_physical
+        self.log_scaled = first.log_scaled
         self.data = JointData(np.concatenate([d.t for d in self.records]),
                               np.concatenate([d.y for d in self.records]),
                               np.concatenate([d.w for d in self.records]), None,

@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import time
 from typing import Optional, Sequence
 
 import equinox as eqx
@@ -112,15 +111,15 @@ class Layout:
         return self.t0 + self.h * np.arange(self.n_steps + 1)
 
 
-def _with_params(system: System, params, p) -> System:
+def _with_params(system: System, state: State, params, p) -> tuple[System, State]:
     for k, par in enumerate(params):
-        system = par.set(system, p[k])
-    return system
+        system, state = par.apply(system, state, p[k])
+    return system, state
 
 
 def simulate_output(system: System, state: State, solver, layout: Layout, p):
     """(output on the simulation grid (n_steps + 1,), run succeeded) for parameters p."""
-    sys = _with_params(system, layout.params, p)
+    sys, state = _with_params(system, state, layout.params, p)
     seg, loop = trajectory(sys, state, solver, t_end=layout.n_steps * layout.h, dt=layout.h,
                            output_dt=layout.h)
     y = jax.vmap(lambda q, v, a: output_value(sys, layout.output, q, v, a))(seg.q, seg.v, seg.acc)
@@ -250,10 +249,14 @@ class Problem:
 
     def __init__(self, system: System, state: State, params=("alpha", "beta"), output: Output | None = None,
                  *, dt: float, t_end: float, solver=DEFAULT_SOLVER, solver_options: dict | None = None,
-                 name: str = "", nuisance: Sequence[str] = (), max_time_offset: float = MAX_TIME_OFFSET):
+                 name: str = "", nuisance: Sequence[str] = (), max_time_offset: float = MAX_TIME_OFFSET,
+                 scenario=None):
         from ..validation import check_positive
         self.system, self.state = system, state
-        self.params = P.resolve(system, params)
+        if isinstance(params, (tuple, list)) and params and all(isinstance(q, P.Parameter) for q in params):
+            self.params = tuple(params)  # resolved already (a refined copy)
+        else:
+            self.params = P.resolve(system, params, state=state, scenario=scenario)
         #: the nuisance parameters of the measurement (:func:`measured`), in NUISANCE order
         self.nuisance = check_nuisance(nuisance)
         self.max_time_offset = check_positive("max_time_offset", max_time_offset, "s")
@@ -324,10 +327,11 @@ class Problem:
                              f"(outputs: {', '.join(outs) or 'none'})")
         run = sc.solver
         system, state = _build(sc)
-        if sc.initial_mode == "static" and any(p.kind in ("E", "mass") for p in P.resolve(system, params)):
+        resolved = P.resolve(system, params, state=state, scenario=sc)
+        if sc.initial_mode == "static" and any(p.kind in ("E", "mass") for p in resolved):
             raise ModelError(f"scenario {sc.name!r} starts from a static equilibrium, which depends on "
                              "E and the masses; only alpha and beta can be identified on it")
-        problem = cls(system, state, params, outs[output], dt=run.dt,
+        problem = cls(system, state, resolved, outs[output], dt=run.dt,
                       t_end=run.t_end if t_end is None else t_end, solver=run.solver,
                       solver_options={**run.solver_options, **(solver_options or {})}, name=sc.name,
                       nuisance=nuisance, max_time_offset=max_time_offset)
@@ -348,7 +352,7 @@ class Problem:
         """The same problem with the step divided by ``step`` and (scenario-built
         problems with one beam) the element count multiplied by ``mesh``."""
         if mesh == 1:
-            new = Problem(self.system, self.state, tuple(p.name for p in self.params), self.output,
+            new = Problem(self.system, self.state, self.params, self.output,
                           dt=self.dt / step, t_end=self.t_end - self.t0, solver=self.solver, name=self.name,
                           nuisance=self.nuisance, max_time_offset=self.max_time_offset)
             new.recipe = self.recipe
@@ -375,8 +379,15 @@ class Problem:
 
     @property
     def n_physical(self) -> int:
-        """Number of physical parameters (the first entries of p; fitted on log p)."""
+        """Number of physical parameters (the first entries of p)."""
         return len(self.params)
+
+    @property
+    def log_scaled(self) -> np.ndarray:
+        """Which entries of p are fitted on log p (bool, (len(names),)): the positive
+        physical parameters (every named kind; a scenario key whose value is > 0); the
+        others (a scenario key at a value <= 0, the nuisance parameters) on p itself."""
+        return np.array([p.positive for p in self.params] + [False] * len(self.nuisance))
 
     def values(self) -> np.ndarray:
         """The parameters' values in the built system (physical units), then the
@@ -413,7 +424,9 @@ class Problem:
             elif n == "gain":
                 if not math.isfinite(x) or x <= 0:
                     raise ModelError(f"parameter gain must be a finite number > 0, got {x!r}")
-            elif not math.isfinite(x) or x < 0:
+            elif not math.isfinite(x):
+                raise ModelError(f"parameter {n} must be a finite number, got {x!r}")
+            elif x < 0 and self.params[self.names.index(n)].positive:
                 raise ModelError(f"parameter {n} must be a finite number >= 0, got {x!r}")
         return p
 
@@ -537,9 +550,9 @@ class Problem:
         layout = self.layout([data])
         t, y, w = (jnp.asarray(a[0]) for a in stack_data([data]))
 
-        if self.nuisance:
-            raise ModelError("loss_function works on log p of the physical parameters; this problem "
-                             "has nuisance parameters (use evaluate)")
+        if not self.log_scaled.all():
+            raise ModelError("loss_function works on log p of positive physical parameters; this problem "
+                             "has nuisance parameters or a parameter at a value <= 0 (use evaluate)")
 
         def f(theta):
             r, _ = residuals(self.system, self.state, self.solver, layout, jnp.exp(theta), t, y, w)

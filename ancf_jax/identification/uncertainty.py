@@ -106,7 +106,7 @@ def profile(problem: Problem, result, name: str, steps=(-1.5, 1.5), *,
     points = []
     for s in steps:
         value = float(result.estimates[k] + s * se)
-        if k < problem.n_physical and value <= 0:
+        if problem.log_scaled[k] and value <= 0:
             continue
         start = {m: float(v) for m, v in zip(result.names, result.estimates)}
         start[name] = value

@@ -8,8 +8,9 @@ minimum, maximum magnitude or final value) and estimate S1 and ST with Saltelli'
 Jansen's estimators (``SALib.analyze.sobol``), with bootstrap confidence intervals.
 
 Local: :func:`local_sensitivities` differentiates the same scalar with respect to the
-swept keys (those that are traced leaves of the built system:
-:data:`~ancf_jax.identification.parameters.SCENARIO_KEYS`) at each of several points,
+swept keys (any scalar key of the scenario that
+:mod:`ancf_jax.identification.parameters` accepts: the named kinds are traced leaves of
+the built system, other keys are probed by rebuilding) at each of several points,
 by forward mode (``jax.jacfwd``) through the whole run, vmapped over the points: one
 compiled program, no rebuild.
 """
@@ -67,7 +68,9 @@ def local_sensitivities(model, keys, points, output: str, reduce: str = "max", *
 
     Args:
         model: a shipped scenario name or a scenario file.
-        keys: dotted keys (:data:`~ancf_jax.identification.parameters.SCENARIO_KEYS`).
+        keys: dotted scalar keys of the scenario (any that
+            :mod:`ancf_jax.identification.parameters` accepts: ``beams.NAME.alpha``,
+            ``bodies.NAME.mass``, ``beams.NAME.section.I``, ``gravity[1]``, ...).
         points: values of the keys, shape (m, len(keys)) (e.g. the members of a sweep,
             or the centre of its box).
         output: a named output of the scenario (a position, stress, or their
@@ -85,7 +88,6 @@ def local_sensitivities(model, keys, points, output: str, reduce: str = "max", *
     import jax.numpy as jnp
 
     from ..errors import ModelError
-    from ..identification import parameters as P
     from ..identification.problem import Problem, simulate_output
     from ..identification.data import Measurements
     if reduce not in REDUCTIONS:
@@ -96,8 +98,7 @@ def local_sensitivities(model, keys, points, output: str, reduce: str = "max", *
         raise SweepError(f"points: finite values of shape (m, {len(keys)}) (one column per key), "
                          f"got shape {points.shape}")
     try:
-        names = [P.from_scenario_key(k) for k in keys]
-        problem = Problem.from_scenario(model, names, output, overrides=overrides, t_end=t_end)
+        problem = Problem.from_scenario(model, keys, output, overrides=overrides, t_end=t_end)
     except ModelError as e:
         raise SweepError(str(e)) from None
     grid = problem.t0 + problem.dt * np.arange(int(round((problem.t_end - problem.t0) / problem.dt)) + 1)
