@@ -155,9 +155,10 @@ def resolve(system: System, names, *, state=None, scenario=None) -> tuple[Parame
     """Parameters of ``system`` named ``names`` (see module docstring).
 
     Args:
-        system, state: the built model and its initial state (``state``: needed for a
-            scenario key other than :data:`SCENARIO_KEYS`).
+        system: the built model.
         names: parameter names or dotted scenario keys (a sequence or ``"a,b"``).
+        state: its initial state (needed for a scenario key other than
+            :data:`SCENARIO_KEYS`).
         scenario: the loaded :class:`~ancf_jax.scenario.Scenario` that ``system`` and
             ``state`` were built from; with it, any scalar key of the file is a
             parameter (probed, :func:`probe_key`).
