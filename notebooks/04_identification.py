@@ -146,4 +146,5 @@ print("within 3 standard errors of the true value:", np.mean(np.abs(alpha - 0.02
 # refining them would move an estimate by more than 0.3 standard errors;
 # `ancf_jax.identification.bootstrap` and `profile` check the standard errors without
 # linearising. The workflow and the coverage measured on foreign data are in
-# `docs/identification.md` ("A measured record, end to end").
+# `docs/identification.md` ("A measured record, end to end"); notebook 06 fits such a
+# record made by Exudyn.
