@@ -203,7 +203,11 @@ def through_points(points, slopes, *, n_max=None) -> BeamMesh:
         chord = np.linalg.norm(p[k + 1] - p[k])
         if chord == 0.0:
             raise ModelError(f"points {k} and {k + 1} coincide: element lengths must be > 0")
-        e = jnp.asarray(np.concatenate([p[k], t[k], p[k + 1], t[k + 1]]))
+        # in coordinates local to the element's first point: the arc length does not
+        # depend on where the element is, and far from the origin (a 600 m line) the
+        # rounding of absolute positions (1e-13 of the chord) kept the fixed point
+        # from meeting LENGTH_TOLERANCE
+        e = jnp.asarray(np.concatenate([np.zeros(2), t[k], p[k + 1] - p[k], t[k + 1]]))
         lengths.append(element_length(lambda l: float(_hermite_arc_length(e, l)), chord, f"element {k}"))
     nodes = np.column_stack([p, t])
     return _finish(np.array(lengths), nodes, n_max)

@@ -71,3 +71,21 @@ def test_catenary_nodes_length_and_ends():
     np.testing.assert_allclose(nodes[[0, -1], :2], [[0, 0], [3.8, 0]])
     np.testing.assert_allclose(np.hypot(nodes[:, 2], nodes[:, 3]), 1.0)
     assert nodes[20, 1] < -0.5
+
+
+def test_through_points_far_from_the_origin():
+    """Element lengths do not depend on where the points are: a straight 0.5 m element
+    is its chord, and a quarter circle of radius 1 keeps its length (one Hermite
+    cubic's, 0.9 % short of π/2) to 1e-14 relative, at the origin and 10 km away
+    (there the absolute positions' rounding, 1e-13 of the chord, had stopped the fixed
+    point of the length from converging: the shipped 600 m catenary failed to build)."""
+    arc = np.linspace(0.0, np.pi / 2, 2)
+    circle = np.column_stack([np.cos(arc), np.sin(arc)])
+    tangents = np.column_stack([-np.sin(arc), np.cos(arc)])
+    lengths = []
+    for x0 in (0.0, 358.25, 1e4):
+        straight = mesh.through_points([[x0, 0.0], [x0 + 0.5, 0.0]], [[1.0, 0.0], [1.0, 0.0]])
+        assert float(straight.element_lengths[0]) == pytest.approx(0.5, rel=1e-14)
+        lengths.append(float(mesh.through_points(circle + [x0, 0.0], tangents).element_lengths[0]))
+    assert lengths[0] == pytest.approx(np.pi / 2, rel=1e-2)
+    np.testing.assert_allclose(lengths, lengths[0], rtol=1e-14)
