@@ -467,8 +467,12 @@ def load_checkpoint(path) -> Checkpoint:
         if "checkpoint_solver" not in f:
             raise ModelError(f"{path}: no checkpoint in this file (written by a fixed-step run of "
                              "ancf_jax 0.1 or later)")
-        carry = Carry(*(jnp.asarray(f[f"checkpoint_{k}"]) for k in Carry.__dataclass_fields__))
-        return Checkpoint(carry, str(f["checkpoint_solver"]))
+        fields = {k: jnp.asarray(f[f"checkpoint_{k}"]) for k in Carry.__dataclass_fields__ if k != "memory"}
+        # the solver memory's leaves, rebuilt by the integrator that continues the run
+        # (AbstractIntegrator.resume)
+        n_memory = sum(k.startswith("checkpoint_memory_") for k in f.files)
+        memory = tuple(jnp.asarray(f[f"checkpoint_memory_{i}"]) for i in range(n_memory)) or None
+        return Checkpoint(Carry(**fields, memory=memory), str(f["checkpoint_solver"]))
 
 
 def _simulate_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, options,
