@@ -47,8 +47,7 @@ def test_reused_factors_reach_the_per_step_solution(h1):
     (1e-10 m) while contracting by at most ``contraction`` = 1/4 per iteration (else the
     matrix is refreshed), so its error is at most tol·ρ/(1 − ρ) = tol/3 m per step; over
     N = 300 steps of a stable system the difference stays below N·tol = 3e-8 m (measured
-    on H1: see the assertion's message). ``max_age = 1`` factors at every step: the
-    per-step run itself."""
+    on H1: 7.5e-11 m, with 0.063 factorizations per step)."""
     system, state = h1
     per_step, status, _ = _run(system, state, GeneralizedAlpha(), H, T_END)
     reused, status_reused, n_fact = _run(system, state, GeneralizedAlpha(factor_reuse=AcrossSteps(16)), H, T_END)
@@ -58,11 +57,6 @@ def test_reused_factors_reach_the_per_step_solution(h1):
     assert diff <= steps * TOL, diff
     # the factors were reused: about one factorization per max_age steps
     assert n_fact < 0.25 * steps, n_fact
-    one, _, n_one = _run(system, state, GeneralizedAlpha(factor_reuse=AcrossSteps(1)), H, T_END)
-    assert n_one == steps
-    # the same iteration; the compiled programs differ, so the results agree to rounding
-    # (slopes of order 1: measured 1e-14)
-    np.testing.assert_allclose(one, per_step, rtol=0.0, atol=1e-13)
 
 
 _LOG = []
@@ -111,7 +105,7 @@ def test_gradient_with_reused_factors_equals_central_differences(h1):
     theorem, each factored at its initial iterate as without reuse), so the gradient
     equals central differences of the run itself (same compiled program; Newton
     tolerance 1e-12 so that the differences over δ = 1e-4 relative see no Newton noise;
-    truncation O(δ²)). Measured: see the assertion's message."""
+    truncation O(δ²)). Measured: 5e-10 relative."""
     from ancf_jax.simulation import trajectory
     system, state = h1
 
@@ -128,6 +122,28 @@ def test_gradient_with_reused_factors_equals_central_differences(h1):
     fd = (reused(1.0 + d)[0] - reused(1.0 - d)[0]) / (2 * d)
     assert abs(grad) > 0
     assert abs(grad - fd) <= 1e-6 * abs(grad), (grad, fd)
+
+
+def test_memory_is_kept_by_checkpoints_and_set_by_flat_options(h1):
+    """A checkpoint file holds the factor memory as its leaves (``checkpoint_memory_i``):
+    ``resume`` rebuilds it for the same solver, starts fresh where it does not fit, and
+    drops it for a solver that keeps none; the flat option ``reuse_factors`` (scenario
+    key, ``make_solver``) is ``AcrossSteps(max_age)``."""
+    from ancf_jax.simulation import make_solver
+    system, state = h1
+    solver = GeneralizedAlpha(factor_reuse=AcrossSteps(4))
+    context = solver.prepare(system)
+    carry = solver.init(system, state, context)
+    marked = jax.tree.map(lambda a: a + 1, carry.memory)
+    leaves = tuple(np.asarray(a) for a in jax.tree.leaves(marked))
+    kept = solver.resume(system, eqx.tree_at(lambda c: c.memory, carry, leaves), context)
+    assert jax.tree.structure(kept.memory) == jax.tree.structure(carry.memory)
+    assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(jax.tree.leaves(kept.memory), leaves))
+    fresh = solver.resume(system, eqx.tree_at(lambda c: c.memory, carry, leaves[:-1]), context)
+    assert np.isnan(fresh.memory.h) and int(fresh.memory.factorizations) == 0
+    assert GeneralizedAlpha().resume(system, carry, context).memory is None
+    assert make_solver("generalized-alpha", reuse_factors=8).factor_reuse == AcrossSteps(8)
+    assert isinstance(make_solver("generalized-alpha").factor_reuse, type(GeneralizedAlpha().factor_reuse))
 
 
 def test_max_age_must_be_a_positive_integer():
