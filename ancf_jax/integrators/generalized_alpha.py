@@ -46,10 +46,13 @@ unchanged: the tangent systems of the implicit differentiation are factored at t
 initial iterate of each step as without reuse. Measured (h = 1 ms; per step against
 factored per step, ``benchmarks/pantograph_catenary.py reuse`` and RESULTS.md): the
 2-span pantograph–catenary (1,937 coordinates, taut wires moving little per step)
-factors 0.19 times per step at 5.0 instead of 3.3 Newton iterations and runs 1.4×
-faster, 5e-11 m from the per-step run; M1 (a stiff wire swinging through large
-rotations) at h = 1.25 ms needs more than one factorization per step either way and
-runs slower with reuse (5.2 instead of 3.9 iterations), so reuse is opt-in.
+factors 0.185 times per step at 5.0 instead of 3.3 Newton iterations, 7.6 instead of
+11.6 ms per step, 5e-11 m from the per-step run (``max_age`` 64: the same, its
+refreshes come from slow contraction); M1 (a stiff wire swinging through large
+rotations) at h = 1.25 ms needs more than one factorization per step either way (1.35
+at 5.2 iterations instead of 1 at 3.9) and runs 1.07–1.2× slower with reuse, so reuse is
+opt-in. What remains of the catenary's step is mostly the iterations and the velocity
+projection below (2 of its 7.2 ms: the mass-metric factors at the new Φ_q).
 
 Positions satisfy Φ = 0 to the Newton tolerance at every step (index 3). With
 ``velocity_projection=True`` (default) the velocities are also projected onto
