@@ -52,7 +52,8 @@ refreshes come from slow contraction); M1 (a stiff wire swinging through large
 rotations) at h = 1.25 ms needs more than one factorization per step either way (1.35
 at 5.2 iterations instead of 1 at 3.9) and runs 1.07–1.2× slower with reuse, so reuse is
 opt-in. What remains of the catenary's step is mostly the iterations and the velocity
-projection below (2 of its 7.2 ms: the mass-metric factors at the new Φ_q).
+projection below (2.0 of its 7.2 ms against ``velocity_projection=False`` in the same
+process, best of 4: the mass-metric factors at the new Φ_q).
 
 Positions satisfy Φ = 0 to the Newton tolerance at every step (index 3). With
 ``velocity_projection=True`` (default) the velocities are also projected onto
