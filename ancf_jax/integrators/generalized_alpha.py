@@ -43,15 +43,15 @@ within a step by the root finder's rules (a correction shrinking by less than
 below the tolerance while contracting by ρ ≤ ``contraction``, so the solution differs
 from the per-step one by the Newton error (≤ tol·ρ/(1 − ρ) per step). Derivatives are
 unchanged: the tangent systems of the implicit differentiation are factored at the
-initial iterate of each step as without reuse. Measured (h = 1 ms; per step against
-factored per step, ``benchmarks/pantograph_catenary.py reuse`` and RESULTS.md): the
-2-span pantograph–catenary (1,937 coordinates, taut wires moving little per step)
+initial iterate of each step as without reuse. Measured
+(``python -m benchmarks.pantograph_catenary reuse``: h = 1 ms, 200 steps, interleaved,
+best of 5, ``benchmarks/results/pantograph_catenary.json``): the 2-span pantograph–catenary (1,937 coordinates, taut wires moving little per step)
 factors 0.185 times per step at 5.0 instead of 3.3 Newton iterations, 7.6 instead of
 11.6 ms per step, 5e-11 m from the per-step run (``max_age`` 64: the same, its
 refreshes come from slow contraction); M1 (a stiff wire swinging through large
-rotations) at h = 1.25 ms needs more than one factorization per step either way (1.35
-at 5.2 iterations instead of 1 at 3.9) and runs 1.07–1.2× slower with reuse, so reuse is
-opt-in. What remains of the catenary's step is mostly the iterations and the velocity
+rotations) at h = 1.25 ms, 0–2 s (interleaved in one process, best of 9) needs more
+than one factorization per step either way (1.35 at 5.2 iterations instead of 1 at 3.9)
+and runs 1.07–1.2× slower with reuse, so reuse is opt-in. What remains of the catenary's step is mostly the iterations and the velocity
 projection below (2.0 of its 7.2 ms against ``velocity_projection=False`` in the same
 process, best of 4: the mass-metric factors at the new Φ_q).
 
