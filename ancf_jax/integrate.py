@@ -501,8 +501,12 @@ class Checkpoint(eqx.Module):
 def initial_loop(system: System, integrator: AbstractIntegrator, state: State | Checkpoint,
                  context) -> LoopState:
     """Initial :class:`LoopState`: consistent accelerations and multipliers of a state,
-    or the carry of a :class:`Checkpoint` as it is."""
-    carry = state.carry if isinstance(state, Checkpoint) else integrator.init(system, state, context)
+    or the carry of a :class:`Checkpoint` as it is (its solver memory as the integrator
+    keeps it, :meth:`~ancf_jax.integrators.base.AbstractIntegrator.resume`)."""
+    if isinstance(state, Checkpoint):
+        carry = integrator.resume(system, state.carry, context)
+    else:
+        carry = integrator.init(system, state, context)
     return LoopState(carry, jnp.asarray(Failure.OK), jnp.asarray(jnp.nan))
 
 

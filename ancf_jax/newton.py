@@ -12,6 +12,13 @@ iteration contracts fast; it is refactored at the current iterate when a correct
 shrinks by less than ``contraction`` (a strongly nonlinear solve falls back to full
 Newton), every ``refresh_every`` iterations, and with ``refresh_first`` after the first
 correction. ``contraction = 0`` refactors at every iteration (full Newton).
+A caller may also pass the factors it holds (``factors``, e.g. those of the previous
+time step, :class:`~ancf_jax.integrators.generalized_alpha.AcrossSteps`) and whether
+they must be refreshed at the first iterate (``refresh``); the solution then returns
+the factors in use at its end and the number of factorizations it made, for the
+caller to keep. Modified Newton converges to the same root with any nonsingular
+approximation of the matrix; only the rate of contraction differs, and the refresh
+rules above catch a matrix that has become too stale.
 
 Derivatives. :meth:`ModifiedNewton.root` wraps the iteration in
 :func:`jax.lax.custom_root`, so ``jax.grad`` and ``jax.jvp`` differentiate the
@@ -39,12 +46,28 @@ class NewtonSolution(eqx.Module):
         converged: whether the stopping rule was met (bool).
         residual_norm: ``residual_norm`` of the last residual evaluated (NaN when the
             solve was given no norm).
+        factors: the factors of the Newton matrix in use at the end (only when the
+            solve was given ``factors``; else None).
+        factorizations: factorizations the solve made (int; only with ``factors``).
     """
 
     x: jnp.ndarray
     iterations: jnp.ndarray
     converged: jnp.ndarray
     residual_norm: jnp.ndarray
+    factors: object = None
+    factorizations: jnp.ndarray | None = None
+
+
+def _as_float(tree):
+    """Integer leaves (LU permutations) as floats: auxiliary outputs of
+    :func:`jax.lax.custom_root` must be floating point (exact below 2⁵³)."""
+    return jax.tree.map(lambda a: a if jnp.issubdtype(a.dtype, jnp.floating) else a.astype(float), tree)
+
+
+def _like(tree, template):
+    """Leaves of ``tree`` in the dtypes of ``template`` (undoes :func:`_as_float`)."""
+    return jax.tree.map(lambda a, t: a.astype(t.dtype), tree, template)
 
 
 class ModifiedNewton(eqx.Module):
@@ -80,7 +103,7 @@ class ModifiedNewton(eqx.Module):
         return jax.lax.stop_gradient(self.linear_solver.init(linearize(x), chain_factor))
 
     def solve(self, residual, linearize, x0, *, size: int, chain_factor=None, scale=1.0,
-              residual_norm=None) -> NewtonSolution:
+              residual_norm=None, factors=None, refresh=True) -> NewtonSolution:
         """Solve residual(x) = 0 from x0.
 
         Args:
@@ -94,9 +117,17 @@ class ModifiedNewton(eqx.Module):
             scale: scale of the unknowns for the step tolerance (may be traced).
             residual_norm: F ↦ scalar, for ``residual_tolerance`` and
                 ``max_backtracks`` (non-finite norm: retreat).
+            factors: factors of an approximation of the Newton matrix to start with
+                (a pytree as ``linear_solver.init`` returns; None: factor at x0).
+            refresh: with ``factors``: factor at x0 instead (bool, may be traced).
         """
-        fac_shape = jax.eval_shape(lambda x: self.factor(linearize, x, chain_factor), x0)
-        fac_none = jax.tree.map(lambda a: jnp.zeros(a.shape, a.dtype), fac_shape)
+        kept = factors is not None
+        if kept:
+            fac0, refresh0 = factors, jnp.asarray(refresh)
+        else:
+            fac_shape = jax.eval_shape(lambda x: self.factor(linearize, x, chain_factor), x0)
+            fac0 = jax.tree.map(lambda a: jnp.zeros(a.shape, a.dtype), fac_shape)
+            refresh0 = jnp.array(True)
         guarded = residual_norm is not None
 
         def cond(c):
@@ -114,7 +145,9 @@ class ModifiedNewton(eqx.Module):
                 ok = jnp.array(True)
             # the matrix is factored inside the loop (first iteration and refreshes), so
             # the factorization is traced and compiled once
-            fac = run_if(c["refresh"] & ok, lambda _: self.factor(linearize, x, chain_factor), c["fac"])
+            fresh = c["refresh"] & ok
+            fac = run_if(fresh, lambda _: self.factor(linearize, x, chain_factor), c["fac"])
+            out["nf"] = c["nf"] + fresh.astype(jnp.int32)
             dx = self.linear_solver.compute(fac, -r)
             x_new = x + dx
             err = jnp.max(jnp.abs(dx[:size]))
@@ -139,23 +172,32 @@ class ModifiedNewton(eqx.Module):
             return out
 
         zero = jnp.zeros((), jnp.int32)
-        init = dict(x=x0, fac=fac_none, it=zero, done=jnp.array(False), err=jnp.array(jnp.inf),
-                    refresh=jnp.array(True), rn=jnp.array(jnp.nan), back=zero)
+        init = dict(x=x0, fac=fac0, it=zero, done=jnp.array(False), err=jnp.array(jnp.inf),
+                    refresh=refresh0, rn=jnp.array(jnp.nan), back=zero, nf=zero)
         if guarded and self.max_backtracks:
             init.update(x_good=x0, dx=jnp.zeros_like(x0), a=jnp.array(1.0))
         c = jax.lax.while_loop(cond, body, init)
+        if kept:
+            return NewtonSolution(c["x"], c["it"], c["done"], c["rn"], c["fac"], c["nf"])
         return NewtonSolution(c["x"], c["it"], c["done"], c["rn"])
 
     def root(self, residual, linearize, x0, *, size: int, implicit: bool = True,
-             refinement: int = 4, chain_factor=None) -> NewtonSolution:
-        """:meth:`solve`, differentiated implicitly when ``implicit`` (module docstring)."""
+             refinement: int = 4, chain_factor=None, factors=None, refresh=True) -> NewtonSolution:
+        """:meth:`solve`, differentiated implicitly when ``implicit`` (module docstring).
+
+        ``factors`` and ``refresh`` as for :meth:`solve`: they serve the forward
+        iteration only; the tangent solves factor the matrix at x0 as without them."""
+        kw = dict(size=size, chain_factor=chain_factor, factors=factors, refresh=refresh)
         if not implicit:
-            return self.solve(residual, linearize, x0, size=size, chain_factor=chain_factor)
+            return self.solve(residual, linearize, x0, **kw)
 
         def solve(f, x_init):
-            sol = self.solve(f, linearize, x_init, size=size, chain_factor=chain_factor)
+            sol = self.solve(f, linearize, x_init, **kw)
             # auxiliary outputs of custom_root must be floating point
-            return sol.x, (sol.iterations.astype(float), sol.converged.astype(float))
+            aux = (sol.iterations.astype(float), sol.converged.astype(float))
+            if factors is not None:
+                aux += (sol.factorizations.astype(float), _as_float(sol.factors))
+            return sol.x, aux
 
         def tangent_solve(g, y):
             # J x = y with the matrix at the initial iterate and iterative refinement
@@ -169,6 +211,10 @@ class ModifiedNewton(eqx.Module):
 
             return jax.lax.fori_loop(0, refinement, refine, self.linear_solver.compute(fac, y))
 
-        x, (iters, conv) = jax.lax.custom_root(residual, x0, solve, tangent_solve, has_aux=True)
-        return NewtonSolution(x, jax.lax.stop_gradient(iters).astype(jnp.int32),
-                              jax.lax.stop_gradient(conv) > 0.5, jnp.array(jnp.nan))
+        x, aux = jax.lax.custom_root(residual, x0, solve, tangent_solve, has_aux=True)
+        aux = jax.lax.stop_gradient(aux)
+        iters, conv = aux[0].astype(jnp.int32), aux[1] > 0.5
+        if factors is None:
+            return NewtonSolution(x, iters, conv, jnp.array(jnp.nan))
+        return NewtonSolution(x, iters, conv, jnp.array(jnp.nan), _like(aux[3], factors),
+                              aux[2].astype(jnp.int32))

@@ -509,8 +509,11 @@ class Results:
         if self.checkpoint is None:
             return {}
         c = self.checkpoint.carry
-        return {"checkpoint_solver": np.array(self.checkpoint.solver),
-                **{f"checkpoint_{k}": np.asarray(getattr(c, k)) for k in type(c).__dataclass_fields__}}
+        # the solver memory (generalized-α's AcrossSteps factors) as its leaves, numbered
+        memory = {f"checkpoint_memory_{i}": np.asarray(a) for i, a in enumerate(jax.tree.leaves(c.memory))}
+        return {"checkpoint_solver": np.array(self.checkpoint.solver), **memory,
+                **{f"checkpoint_{k}": np.asarray(getattr(c, k)) for k in type(c).__dataclass_fields__
+                   if k != "memory"}}
 
     def save_summary(self, path: str | Path, **extra) -> dict:
         """Write :meth:`summary` (and any extra entries) as JSON; returns the dict."""

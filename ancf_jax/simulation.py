@@ -46,7 +46,7 @@ from .failures import Failure
 from .integrators.base import AbstractAdaptiveSolver, AbstractIntegrator, AbstractSolver, Carry
 from .integrators.diffrax_solvers import KINDS as DIFFRAX_KINDS
 from .integrators.diffrax_solvers import DiffraxSolver
-from .integrators.generalized_alpha import CONSTRAINT_LEVELS, GeneralizedAlpha
+from .integrators.generalized_alpha import CONSTRAINT_LEVELS, AcrossSteps, GeneralizedAlpha
 from .integrators.explicit import RK4, ExplicitEuler
 from .linalg import LINEAR_SOLVERS
 from .newton import ModifiedNewton
@@ -77,8 +77,10 @@ def make_solver(name: str, **options):
     ``linear_solver`` (``"auto"``, ``"bordered"``, ``"dense"``,
     :data:`ancf_jax.linalg.LINEAR_SOLVERS`) its linear solver; the rest are fields of
     the integrator, except ``index`` (2 or 3), which chooses generalized-α's constraint
-    level (:data:`~ancf_jax.integrators.generalized_alpha.CONSTRAINT_LEVELS`). Defaults
-    are those of the classes."""
+    level (:data:`~ancf_jax.integrators.generalized_alpha.CONSTRAINT_LEVELS`), and
+    ``reuse_factors`` (an integer N >= 1), which carries its Newton-matrix factors across
+    steps, N at most (:class:`~ancf_jax.integrators.generalized_alpha.AcrossSteps`).
+    Defaults are those of the classes."""
     if name not in SOLVERS:
         raise ModelError(f"solver must be one of {', '.join(SOLVERS)}, got {name!r}")
     options = dict(options)
@@ -97,6 +99,9 @@ def make_solver(name: str, **options):
                 raise ModelError(f"index (constraint level) of generalized-alpha must be one of "
                                  f"{sorted(CONSTRAINT_LEVELS)}, got {index!r}")
             options["constraints"] = CONSTRAINT_LEVELS[index]()
+        reuse = options.pop("reuse_factors", None)
+        if reuse is not None:
+            options["factor_reuse"] = AcrossSteps(max_age=reuse)
         return GeneralizedAlpha(root_finder=ModifiedNewton(**rf), **options)
     if ls is not None:
         options["linear_solver"] = ls
@@ -467,8 +472,12 @@ def load_checkpoint(path) -> Checkpoint:
         if "checkpoint_solver" not in f:
             raise ModelError(f"{path}: no checkpoint in this file (written by a fixed-step run of "
                              "ancf_jax 0.1 or later)")
-        carry = Carry(*(jnp.asarray(f[f"checkpoint_{k}"]) for k in Carry.__dataclass_fields__))
-        return Checkpoint(carry, str(f["checkpoint_solver"]))
+        fields = {k: jnp.asarray(f[f"checkpoint_{k}"]) for k in Carry.__dataclass_fields__ if k != "memory"}
+        # the solver memory's leaves, rebuilt by the integrator that continues the run
+        # (AbstractIntegrator.resume)
+        n_memory = sum(k.startswith("checkpoint_memory_") for k in f.files)
+        memory = tuple(jnp.asarray(f[f"checkpoint_memory_{i}"]) for i in range(n_memory)) or None
+        return Checkpoint(Carry(**fields, memory=memory), str(f["checkpoint_solver"]))
 
 
 def _simulate_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, options,

@@ -12,6 +12,10 @@
    statistics against the EN 50318:2002 ranges, wall time and real-time factor.
 4. ``batch``: the reduced catenary at 8 speeds (150–350 km/h) in one vmapped run
    against 8 single runs (same program and step count).
+5. ``reuse``: the 2-span model of ``scaling`` with the Newton matrix factored at every
+   step (default) and carried across steps (``AcrossSteps``, issues 17 and 21), 200
+   steps each, interleaved, best of 5: cost per step, Newton iterations and
+   factorizations per step, and the difference of the two runs.
 
 Run from the repository root: ``python -m benchmarks.pantograph_catenary [PART ...]``
 (default all; about 25 minutes on the 2-core machine); writes
@@ -58,6 +62,31 @@ def scaling() -> dict:
     exponent = float(np.polyfit(np.log(e), np.log(c), 1)[0])
     marginal = float(np.polyfit(e, c, 1)[0]) * 1e3  # µs per element-step
     return dict(runs=rows, exponent=exponent, marginal_us_per_element=marginal)
+
+
+def reuse(spans: int = 2, reps: int = 5) -> dict:
+    from ancf_jax.integrators.generalized_alpha import AcrossSteps, GeneralizedAlpha
+    m, _ = pantograph_catenary(CatenaryDesign(spans=spans, element_length=0.5, **SHIPPED), speed=250 / 3.6)
+    system, guess = m.build(assemble=False)
+    state, _ = moving_equilibrium(system, guess)
+    solvers = {"per-step": GeneralizedAlpha(), "across-steps(16)": GeneralizedAlpha(factor_reuse=AcrossSteps(16))}
+    kw = dict(t_end=0.2, dt=1e-3, progress=False)
+    first = {k: simulate(system, state, solver=s, **kw) for k, s in solvers.items()}
+    walls = {k: [] for k in solvers}
+    for _ in range(reps):
+        for k, s in solvers.items():
+            walls[k].append(simulate(system, state, solver=s, **kw).wall_time_s)
+    ref = first["per-step"]
+    rows = []
+    for k, r in first.items():
+        memory = r.checkpoint.carry.memory
+        rows.append(dict(solver=k, status=r.status, compile_s=r.compile_time_s, step_ms=1e3 * min(walls[k]) / 200,
+                         step_ms_all=[1e3 * w / 200 for w in walls[k]],
+                         newton_per_step=float(np.sum(r.iterations)) / 200,
+                         factorizations_per_step=None if memory is None else int(memory.factorizations) / 200,
+                         max_q_difference_m=float(np.max(np.abs(r.q - ref.q)))))
+        print(rows[-1], flush=True)
+    return dict(spans=spans, coordinates=system.n_coordinates, steps=200, runs=rows)
 
 
 def convergence() -> dict:
@@ -120,7 +149,7 @@ def batch() -> dict:
                 single_compile_s=singles[0].compile_time_s, max_q_difference_m=agree)
 
 
-PARTS = dict(scaling=scaling, convergence=convergence, full=full, batch=batch)
+PARTS = dict(scaling=scaling, convergence=convergence, full=full, batch=batch, reuse=reuse)
 
 
 def markdown(data: dict) -> str:
@@ -150,6 +179,15 @@ def markdown(data: dict) -> str:
                       f"- {r['statistics']['speed_kmh']:g} km/h: {r['steps']} steps, wall {r['wall_s']:.0f} s, "
                       f"real-time factor {r['real_time_factor']:.1f}, compile {r['compile_s']:.0f} s, build + "
                       f"statics {r['build_and_statics_s']:.0f} s" for r in data["full"]["runs"]))
+    if "reuse" in data:
+        u = data["reuse"]
+        md.append(f"Newton-matrix factors per step or carried across steps ({u['spans']} spans, "
+                  f"{u['coordinates']} coordinates, h = 1 ms, {u['steps']} steps, interleaved, best of "
+                  f"{len(u['runs'][0]['step_ms_all'])}):\n\n" + table(
+                      ["factors", "step [ms]", "Newton/step", "factorizations/step", "max |Δq| [m]"],
+                      [[r["solver"], f"{r['step_ms']:.2f}", f"{r['newton_per_step']:.2f}",
+                        "≥ 1" if r["factorizations_per_step"] is None else f"{r['factorizations_per_step']:.3f}",
+                        f"{r['max_q_difference_m']:.1e}"] for r in u["runs"]]))
     if "batch" in data:
         b = data["batch"]
         md.append(f"Batch of 8 speeds (reduced catenary, {b['steps']} steps): vmapped {b['batch_wall_s']:.1f} s "

@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import abc
+from typing import Any
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -23,6 +24,9 @@ class Carry(eqx.Module):
         lam: Lagrange multipliers λ, shape (m,).
         work: time integrals (dissipated D, external work W_e, constraint work W_c) [J], shape (3,).
         power: their rates at t (:func:`ancf_jax.dae.powers`) [W].
+        memory: what the integrator keeps of its solver across steps (a pytree of
+            fixed shapes, or None): generalized-α's Newton-matrix factors under
+            :class:`~ancf_jax.integrators.generalized_alpha.AcrossSteps`.
     """
 
     t: jnp.ndarray
@@ -33,6 +37,7 @@ class Carry(eqx.Module):
     lam: jnp.ndarray
     work: jnp.ndarray
     power: jnp.ndarray
+    memory: Any = None
 
 
 class StepInfo(eqx.Module):
@@ -83,6 +88,12 @@ class AbstractIntegrator(AbstractSolver):
     def init(self, system, state, context) -> Carry:
         """The initial :class:`Carry` of a run from ``state`` (consistent accelerations
         and multipliers)."""
+
+    @abc.abstractmethod
+    def resume(self, system, carry: Carry, context) -> Carry:
+        """``carry`` (of a checkpoint) with the ``memory`` this integrator carries: kept
+        where it fits (same structure and shapes, or its leaves as a checkpoint file
+        holds them), else fresh; None for an integrator that keeps none."""
 
     @abc.abstractmethod
     def step(self, system, carry: Carry, h, context):

@@ -18,6 +18,7 @@ the generalized-α method is the default for stiff ones.
 from __future__ import annotations
 
 import abc
+import dataclasses
 
 import equinox as eqx
 import jax
@@ -53,6 +54,9 @@ class AbstractExplicit(AbstractIntegrator):
 
     def forward_only(self):
         return self
+
+    def resume(self, system, carry, context):
+        return dataclasses.replace(carry, memory=None)
 
     def _rates(self, system, q, v, t, chain_factor):
         acc, lam = dae.accelerations(system, q, v, t, baumgarte=self.baumgarte,

@@ -29,6 +29,32 @@ it only adds factorizations, so it is off by default. ``DenseLUSolver`` is faste
 small unbatched systems (M1, 38 unknowns; measured in ``benchmarks/single_run.py``);
 vmapped batches on the CPU run the block-tridiagonal solver faster.
 
+Reuse of the Newton matrix (``factor_reuse``). :class:`PerStep` (default) forms and
+factors the matrix at the first iterate of every step. :class:`AcrossSteps` starts each
+step from the factors the previous step ended with, kept in the carry
+(:attr:`~ancf_jax.integrators.base.Carry.memory`, a :class:`FactorMemory`, fixed
+shapes: jit, vmap and checkpoints keep it), as Exudyn's modified Newton does: modified
+Newton converges to the same root with a stale matrix, only more slowly. The factors
+are made anew at the first iterate when the step differs from theirs (β' ∝ 1/h² and
+γ' ∝ 1/h are in the matrix: the first step, a retry in substeps and the step back to
+h, the substeps of a located crossing), when they have served ``max_age`` steps, and
+within a step by the root finder's rules (a correction shrinking by less than
+``contraction``, ``refresh_every``). Each solve still stops when its correction is
+below the tolerance while contracting by ρ ≤ ``contraction``, so the solution differs
+from the per-step one by the Newton error (≤ tol·ρ/(1 − ρ) per step). Derivatives are
+unchanged: the tangent systems of the implicit differentiation are factored at the
+initial iterate of each step as without reuse. Measured
+(``python -m benchmarks.pantograph_catenary reuse``: h = 1 ms, 200 steps, interleaved,
+best of 5, ``benchmarks/results/pantograph_catenary.json``): the 2-span pantograph–catenary (1,937 coordinates, taut wires moving little per step)
+factors 0.185 times per step at 5.0 instead of 3.3 Newton iterations, 7.6 instead of
+11.6 ms per step, 5e-11 m from the per-step run (``max_age`` 64: the same, its
+refreshes come from slow contraction); M1 (a stiff wire swinging through large
+rotations) at h = 1.25 ms, 0–2 s (interleaved in one process, best of 9) needs more
+than one factorization per step either way (1.35 at 5.2 iterations instead of 1 at 3.9)
+and runs 1.07–1.2× slower with reuse, so reuse is opt-in. What remains of the catenary's step is mostly the iterations and the velocity
+projection below (2.0 of its 7.2 ms against ``velocity_projection=False`` in the same
+process, best of 4: the mass-metric factors at the new Φ_q).
+
 Positions satisfy Φ = 0 to the Newton tolerance at every step (index 3). With
 ``velocity_projection=True`` (default) the velocities are also projected onto
 Φ_q v + Φ_t = 0 after the step in the mass metric (the beam-mass factors are constant,
@@ -66,6 +92,7 @@ import jax.numpy as jnp
 
 from .. import dae
 from ..newton import ModifiedNewton
+from ..validation import check_count
 from .base import AbstractIntegrator, Carry, StepInfo
 
 
@@ -105,6 +132,89 @@ class VelocityLevel(AbstractConstraintLevel):
 CONSTRAINT_LEVELS = {3: PositionLevel, 2: VelocityLevel}
 
 
+class FactorMemory(eqx.Module):
+    """The Newton-matrix factors a step leaves to the next (:class:`AcrossSteps`),
+    held in :attr:`~ancf_jax.integrators.base.Carry.memory`.
+
+    Attributes:
+        factors: factors of the Newton matrix (``linear_solver.init``'s pytree).
+        h: the step they were made for [s] (β', γ' depend on it; NaN: none yet).
+        age: steps that have used them, the one that made them included (int).
+        factorizations: factorizations of the Newton matrix since the run began (int;
+            a diagnostic).
+    """
+
+    factors: object
+    h: jnp.ndarray
+    age: jnp.ndarray
+    factorizations: jnp.ndarray
+
+
+class AbstractFactorReuse(eqx.Module):
+    """Where a generalized-α step gets the factors of its Newton matrix from (module
+    docstring, "Reuse of the Newton matrix")."""
+
+    @abc.abstractmethod
+    def initial(self, factor_shape) -> FactorMemory | None:
+        """The memory of a run's first step (None: nothing carried); ``factor_shape``
+        the shapes and dtypes of the factors (:func:`jax.eval_shape`)."""
+
+    @abc.abstractmethod
+    def start(self, memory: FactorMemory | None, h):
+        """(factors to start from or None, whether to factor at the first iterate)."""
+
+    @abc.abstractmethod
+    def update(self, memory: FactorMemory | None, solution, h) -> FactorMemory | None:
+        """The memory after a step of size h whose Newton solve returned ``solution``."""
+
+
+class PerStep(AbstractFactorReuse):
+    """Factor at the first iterate of every step, and nothing carried (the default)."""
+
+    def initial(self, factor_shape):
+        return None
+
+    def start(self, memory, h):
+        return None, True
+
+    def update(self, memory, solution, h):
+        return None
+
+
+class AcrossSteps(AbstractFactorReuse):
+    """Start every step from the factors the previous step ended with; factor anew at
+    the first iterate when the step size differs from theirs (a retry in substeps, a
+    located crossing, the first step) or when they have served ``max_age`` steps.
+    Within a step the root finder's refresh rules apply as ever (slow contraction,
+    ``refresh_every``). ``AcrossSteps(max_age=1)`` is :class:`PerStep`.
+
+    Attributes:
+        max_age: most steps one factorization serves (integer >= 1).
+
+    Raises:
+        ModelError: ``max_age`` out of its range (on construction).
+    """
+
+    max_age: int = eqx.field(static=True, default=16)
+
+    def __check_init__(self):
+        check_count("max_age", self.max_age, 1)
+
+    def initial(self, factor_shape):
+        zeros = jax.tree.map(lambda a: jnp.zeros(a.shape, a.dtype), factor_shape)
+        none = jnp.zeros((), jnp.int32)
+        return FactorMemory(zeros, jnp.array(jnp.nan), none, none)
+
+    def start(self, memory, h):
+        return memory.factors, (memory.h != h) | (memory.age >= self.max_age)
+
+    def update(self, memory, solution, h):
+        made = solution.factorizations > 0
+        return FactorMemory(solution.factors, jnp.asarray(h, memory.h.dtype),
+                            jnp.where(made, 1, memory.age + 1).astype(jnp.int32),
+                            memory.factorizations + solution.factorizations)
+
+
 class GeneralizedAlpha(AbstractIntegrator):
     """Generalized-α (Arnold & Brüls 2007) at a fixed step.
 
@@ -119,6 +229,8 @@ class GeneralizedAlpha(AbstractIntegrator):
             theorem) instead of the Newton iterations.
         constraints: the constraint level, :class:`PositionLevel` (index 3, default)
             or :class:`VelocityLevel` (index 2).
+        factor_reuse: where a step's Newton-matrix factors come from,
+            :class:`PerStep` (default) or :class:`AcrossSteps` (module docstring).
     """
 
     rho_inf: float = eqx.field(static=True, default=0.9)
@@ -127,6 +239,7 @@ class GeneralizedAlpha(AbstractIntegrator):
     refinement: int = eqx.field(static=True, default=4)
     implicit_diff: bool = eqx.field(static=True, default=True)
     constraints: AbstractConstraintLevel = PositionLevel()
+    factor_reuse: AbstractFactorReuse = PerStep()
 
     @property
     def name(self) -> str:
@@ -159,12 +272,32 @@ class GeneralizedAlpha(AbstractIntegrator):
         # residual once more even when nothing is differentiated: ~1 s of tracing
         return dataclasses.replace(self, implicit_diff=False) if self.implicit_diff else self
 
+    def _initial_memory(self, system, q, v, lam, t):
+        """The factor memory of a first step (:meth:`AbstractFactorReuse.initial`)."""
+
+        def factors(q, v, lam, t):
+            jac = system.constraint_jacobian(q, t)
+            matrix = dae.iteration_matrix(system, q, v, lam, t, 1.0, 1.0, jac)
+            return self.linear_solver.init(matrix, None)
+
+        return self.factor_reuse.initial(jax.eval_shape(factors, q, v, lam, t))
+
     def init(self, system, state, context) -> Carry:
         t = jnp.asarray(state.t, float)
         acc, lam = dae.accelerations(system, state.q, state.v, t, chain_factor=context,
                                      linear_solver=self.linear_solver)
         return Carry(t, state.q, state.v, acc, acc, lam, jnp.zeros(3),
-                     dae.powers(system, state.q, state.v, t, lam))
+                     dae.powers(system, state.q, state.v, t, lam),
+                     self._initial_memory(system, state.q, state.v, lam, t))
+
+    def resume(self, system, carry, context):
+        fresh = self._initial_memory(system, carry.q, carry.v, carry.lam, carry.t)
+        leaves, tree = jax.tree.flatten(fresh)
+        kept = jax.tree.leaves(carry.memory)
+        fits = (fresh is not None and len(kept) == len(leaves)
+                and all(jnp.shape(a) == b.shape and jnp.result_type(a) == b.dtype for a, b in zip(kept, leaves)))
+        memory = jax.tree.unflatten(tree, [jnp.asarray(a) for a in kept]) if fits else fresh
+        return dataclasses.replace(carry, memory=memory)
 
     def step(self, system, carry: Carry, h, context):
         am, af, gamma, beta = self.coefficients
@@ -201,8 +334,10 @@ class GeneralizedAlpha(AbstractIntegrator):
             return dae.iteration_matrix(system, q1, v1, lam, t1, beta_p, gamma_p, jac)
 
         y0 = dae.to_solver_order(system, jnp.zeros_like(carry.q), carry.lam)
+        factors, refresh = self.factor_reuse.start(carry.memory, h)
         sol = self.root_finder.root(residual, linearize, y0, size=n, implicit=self.implicit_diff,
-                                    refinement=self.refinement)
+                                    refinement=self.refinement, factors=factors, refresh=refresh)
+        memory = self.factor_reuse.update(carry.memory, sol, h)
         q1, v1, qdd, a1, lam = kinematics(sol.x)
         if self.velocity_projection and system.n_constraints:
             # mass-metric projection; the beam-mass factors are constant (context)
@@ -211,4 +346,4 @@ class GeneralizedAlpha(AbstractIntegrator):
             v1 = dae.project_velocity(system, q1, v1, t1, mfac, jac)
         p1 = dae.powers(system, q1, v1, t1, lam)
         work = carry.work + 0.5 * h * (carry.power + p1)  # trapezoidal rule (order 2)
-        return Carry(t1, q1, v1, qdd, a1, lam, work, p1), StepInfo(sol.iterations, sol.converged)
+        return Carry(t1, q1, v1, qdd, a1, lam, work, p1, memory), StepInfo(sol.iterations, sol.converged)

@@ -670,6 +670,11 @@ class GeneralizedAlphaOptions(Table):
                                                    "drift_tolerance) "
                                                    f"(default {GeneralizedAlpha().constraints.index})")
     linear_solver: Optional[Literal["auto", "bordered", "dense"]] = key(None, doc=LINEAR_SOLVER_DOC)
+    reuse_factors: Optional[int] = key(None, ge=1, le=1000000,
+                                       doc="carry the Newton matrix's factors across steps, refactoring after at "
+                                           "most this many steps, when the step changes and when Newton contracts "
+                                           "slowly (default: factored at every step; faster for taut cables "
+                                           "moving little per step, slower for M1: docs/theory.md)")
 
 
 class ExplicitOptions(Table):

@@ -46,7 +46,8 @@ def test_solver_options_are_options_of_the_solvers():
         # fields of the integrator, of its root finder (generalized-α) and the linear solver
         known = set(classes[name].__dataclass_fields__) | {"linear_solver"}
         if name == "generalized-alpha":
-            known |= set(ROOT_FINDER_OPTIONS) | {"index"}  # index: the constraint level (make_solver)
+            # index: the constraint level; reuse_factors: AcrossSteps(max_age) (make_solver)
+            known |= set(ROOT_FINDER_OPTIONS) | {"index", "reuse_factors"}
         assert set(options) <= known, (name, set(options) - known)
     assert set(ROOT_FINDER_OPTIONS.values()) <= set(ModifiedNewton.__dataclass_fields__)
 
