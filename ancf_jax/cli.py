@@ -125,7 +125,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     run = sub.add_parser("run", help="simulate and write CSV/NPZ/JSON and figures",
                          description="Simulate a model and write results and figures "
-                                     "(default directory results/MODEL).")
+                                     "(default directory results/MODEL). A pantograph scenario with "
+                                     "--set 'pantograph.speed_kmh=[V1, V2, ...]' runs the speeds in one "
+                                     "vmapped batch (results in OUT/<V>kmh/ and OUT/speeds.csv).")
     common(run, "element count of the (single) beam; comma-separated counts run as one vmapped "
                 "batch (m1 default 6, m2 default 12,18,24)")
     run.add_argument("--t-end", type=_positive_float, default=None, help="end time [s]")
@@ -601,7 +603,7 @@ def _speed_list(overrides):
 def _run_speeds(args, speeds, overrides, extra) -> int:
     """``run MODEL --set pantograph.speed_kmh=[V1, V2, ...]``: one scenario per speed,
     run as one vmapped batch (fixed-step solvers) to the longest speed's end, each
-    member cut at its own end (the single-speed run's duration) and written to
+    member cut at the output nearest its own end (the single-speed run's duration) and written to
     ``OUT/<V>kmh/`` as a single-speed run writes ``OUT/``; ``OUT/speeds.csv`` holds
     one row of statistics per speed."""
     import numpy as np
@@ -649,7 +651,7 @@ def _run_speeds(args, speeds, overrides, extra) -> int:
         raise _UsageError(f"{base.path}: {e}") from None
     rows, status = [], 0
     for (label, sc), r in zip(scs.items(), results):
-        r = r.until(ends[label])
+        r = r.until(float(r.t[np.argmin(np.abs(np.asarray(r.t) - ends[label]))]))  # the output nearest its end
         p = sc.spec.pantograph
         run = analyse_pantograph_run(r, sc.spec.catenary.design(), speed_kmh=p.speed_kmh,
                                      start=pantograph_start(sc.spec), spans=p.spans, cutoff=p.cutoff,

@@ -259,7 +259,9 @@ def test_aerodynamic_uplift_shifts_the_static_balance():
     assert f1 - f0 == pytest.approx(c * v * v - k1 * (y1 - y0), abs=1e-8)
     assert 0.9 * c * v * v < f1 - f0 < c * v * v  # the frame spring takes a few per cent
     speed = resolve(system, "speed.pantograph")[0]
-    uplift_at = lambda w: next(f for f in speed.set(system, w).forces if f.name == "pantograph.uplift").magnitude(0.0)  # noqa: E731
+
+    def uplift_at(w):
+        return next(f for f in speed.set(system, w).forces if f.name == "pantograph.uplift").magnitude(0.0)
     assert float(uplift_at(300 / 3.6)) == pytest.approx(100.0 + c * (300 / 3.6) ** 2, rel=1e-14)
     assert float(jax.grad(uplift_at)(v)) == pytest.approx(2 * c * v, rel=1e-14)
 
@@ -304,6 +306,25 @@ def test_a_trailing_pantograph_off_the_line_leaves_the_leading_run_unchanged(sma
         assert both.statistics[key] == pytest.approx(single.statistics[key], rel=1e-10, abs=1e-9), key
     (row,), (run,) = both.statistics["trailing"], both.trailing
     assert run is None and row["spacing_m"] == 30.0 and row["mean_N"] is None
-    assert np.all(both.results.contact("pantograph2.contact")[:, 0] == 0.0)
     with pytest.raises(ModelError, match="pantograph2 starts off the line"):
         run_pantograph_catenary(design, speed_kmh=250, start=0.2, trailing=(20.0,), t_end=0.4)
+
+
+def test_a_list_of_speeds_on_the_command_line_is_read_and_checked(tmp_path, capsys):
+    """``--set pantograph.speed_kmh=[...]`` is taken as a batch of speeds (the other
+    overrides kept), and its misuses are one-line usage errors before anything is
+    built: a speed given twice, --elements, a speed outside the key's range, a
+    trailing pantograph that the run would take onto the line."""
+    from ancf_jax.cli import _speed_list, main
+    assert _speed_list(["catenary.spans=3", "pantograph.speed_kmh=[250, 300.0]"]) == ([250, 300.0],
+                                                                                      ["catenary.spans=3"])
+    assert _speed_list(["pantograph.speed_kmh=300"]) == (None, ["pantograph.speed_kmh=300"])
+    out = str(tmp_path / "out")
+    for extra, message in ((["--set", "pantograph.speed_kmh=[250, 250.0]"], "250 km/h is given twice"),
+                           (["--set", "pantograph.speed_kmh=[250]", "--elements", "4"], "argument --elements"),
+                           (["--set", "pantograph.speed_kmh=[250, 700]"], "pantograph.speed_kmh"),
+                           (["--set", "pantograph.speed_kmh=[250]", "--set", "pantograph.start=100.0",
+                             "--set", "pantograph.trailing=[150.0]"], "pantograph2 starts off the line")):
+        assert main(["run", "pantograph_catenary", "--out", out, *extra]) == 2, extra
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and message in err[0], err

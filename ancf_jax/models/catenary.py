@@ -697,16 +697,17 @@ def pantograph_run_time(catenary: CatenaryDesign, *, start: float, speed: float,
     """Duration [s] of a run: until the last pantograph is one span (at least
     3 / ``cutoff`` seconds of travel: the filter's margin) past the evaluated spans
     (:func:`evaluated_spans`), or the leading one half the first dropper distance
-    before the last pole, whichever comes first (or ``t_end`` [s] if earlier). ``start``: the leading pantograph's
-    x at t = 0 [m], ``speed`` [m/s] > 0. Raises a :class:`~ancf_jax.errors.ModelError`
-    if a trailing pantograph starting off the line (x <= 0) would reach it."""
+    before the last pole, whichever comes first (or at ``t_end`` [s] if earlier).
+    ``start``: the leading pantograph's x at t = 0 [m], ``speed`` [m/s] > 0. Raises a
+    :class:`~ancf_jax.errors.ModelError` if a trailing pantograph starting off the
+    line (x <= 0) would reach it before the end."""
     trailing = check_trailing(trailing)
     _, last = evaluated_spans(catenary, spans)
     x_last = last * catenary.span_length + max(catenary.span_length, 3.0 * speed / cutoff)
     x_lead = catenary.length - 0.5 * catenary.droppers[0]
     back = max(trailing) if trailing else 0.0
-    t_end = min(x_last - (start - back), x_lead - start) / speed if t_end is None else \
-        min(float(t_end), min(x_last - (start - back), x_lead - start) / speed)
+    natural = min(x_last - (start - back), x_lead - start) / speed
+    t_end = natural if t_end is None else min(float(t_end), natural)
     for k, d in enumerate(trailing):
         if start - d <= 0.0 < start - d + speed * t_end:
             raise ModelError(f"{pantograph_name(k + 2)} starts off the line (x = {start - d:g} m) and would "

@@ -571,9 +571,12 @@ class CatenarySpec(Table):
 class PantographSpec(Table):
     """A lumped-mass pantograph (point masses pantograph.1 … bottom to head) running
     under the catenary's contact wire at speed_kmh, in penalty contact with it
-    (pantograph.contact). The run ends one span past the evaluated spans (or at
-    solver.t_end if earlier); `ancf-jax run` writes statistics.json,
-    contact_force.csv and the figures."""
+    (pantograph.contact), pushed up by F0 + c_aero v², and trailing pantographs of
+    the same design (pantograph2, ...). The run ends when the last pantograph is one
+    span past the evaluated spans (or at solver.t_end if earlier); `ancf-jax run`
+    writes statistics.json, contact_force.csv and the figures, and with
+    `--set pantograph.speed_kmh=[V1, V2, ...]` runs the speeds in one vmapped batch
+    (docs/pantograph-catenary.md)."""
 
     masses: Numbers = key(_PAN.masses, unit="kg", doc="m_i > 0 from the bottom (frame) to the head")
     stiffness: Numbers = key(_PAN.stiffness, unit="N/m", doc="k_i >= 0 of the stage below each mass")
@@ -602,7 +605,8 @@ class PantographSpec(Table):
         """The builder's :class:`~ancf_jax.models.catenary.PantographDesign`."""
         return PantographDesign(masses=tuple(self.masses), stiffness=tuple(self.stiffness),
                                 damping=tuple(self.damping), uplift=self.uplift,
-                                aero_coefficient=self.aero_coefficient, contact_stiffness=self.contact_stiffness, contact_damping=self.contact_damping)
+                                aero_coefficient=self.aero_coefficient, contact_stiffness=self.contact_stiffness,
+                                contact_damping=self.contact_damping)
 
 
 # ----------------------------------------------------------------------------- state, solvers
