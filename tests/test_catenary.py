@@ -271,8 +271,9 @@ def test_two_pantographs_share_the_wire_statically():
     (x = 6.5 and 13.5 m): each one's static balance holds (contact force = uplift −
     k₁ Δy₁), and the pair obeys Maxwell–Betti reciprocity: 1 N more uplift on one
     raises the other's frame as much as 1 N more on the other raises the one's (the
-    tangent stiffness of a conservative system is symmetric; to the second-order
-    error of the 1 N step, measured 1e-4 relative)."""
+    tangent stiffness of a conservative system is symmetric; measured 7.9e-7 relative
+    at 1 N and 4.0e-7 at 0.5 N: the finite step's own error, first order in it; B's
+    frame rises by 4.7 % of A's own rise)."""
     design = CatenaryDesign(element_length=1.0, alpha=0.06, beta=7.6e-5, **RUN)
     kw = dict(speed=0.0, start=13.5, trailing=(7.0,))
     names = ("pantograph", pantograph_name(2))
@@ -287,7 +288,7 @@ def test_two_pantographs_share_the_wire_statically():
     base = rises[(100.0, 100.0)]
     ab = rises[(101.0, 100.0)][1] - base[1]  # B's rise per N on A
     ba = rises[(100.0, 101.0)][0] - base[0]  # A's rise per N on B
-    assert ab > 0 and abs(ab - ba) < 1e-3 * ab, (ab, ba)
+    assert ab > 0 and abs(ab - ba) < 1e-5 * ab, (ab, ba)
 
 
 def test_a_trailing_pantograph_off_the_line_leaves_the_leading_run_unchanged(small_runs):
@@ -328,3 +329,15 @@ def test_a_list_of_speeds_on_the_command_line_is_read_and_checked(tmp_path, caps
         assert main(["run", "pantograph_catenary", "--out", out, *extra]) == 2, extra
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and message in err[0], err
+
+
+def test_results_until_cuts_every_history():
+    """Results.until keeps the outputs at t <= t_end (to 1e-9 of a step) in every
+    history, and is the results themselves when nothing is cut."""
+    from ancf_jax.results import Results
+    t = np.arange(6) * 0.1
+    arrays = {k: np.arange(12.0).reshape(6, 2) for k in ("q", "v", "acc", "lam", "work")}
+    r = Results(None, t, iterations=np.arange(6), checkpoint="end", **arrays)
+    cut = r.until(0.3 + 1e-12)
+    assert cut.t.shape == (4,) and cut.q.shape == cut.work.shape == (4, 2) and cut.iterations.shape == (4,)
+    assert cut.checkpoint is None and r.until(0.5) is r and r.until(0.29).t[-1] == pytest.approx(0.2)
