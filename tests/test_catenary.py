@@ -341,3 +341,41 @@ def test_results_until_cuts_every_history():
     cut = r.until(0.3 + 1e-12)
     assert cut.t.shape == (4,) and cut.q.shape == cut.work.shape == (4, 2) and cut.iterations.shape == (4,)
     assert cut.checkpoint is None and r.until(0.5) is r and r.until(0.29).t[-1] == pytest.approx(0.2)
+
+
+def test_trailing_statistics_and_report(small_runs, tmp_path):
+    """The trailing pantograph's analysis and files, on the recorded single run: its
+    contact force taken as both pantographs' (a stand-in results object), the leading
+    one 1 m ahead of the recorded start, so the trailing one is the recorded
+    pantograph: its statistics are the single run's, under ``trailing`` with
+    ``spacing_m``; statistics.json keeps the leading keys and its units convention, and
+    contact_force.csv adds the trailing columns."""
+    from ancf_jax.models.catenary import analyse_pantograph_run
+    from ancf_jax.reports import report_pantograph
+
+    from .json_units import assert_unit_keys
+    single = small_runs[1.0]
+    recorded = single.results
+    force = recorded.contact("pantograph.contact")
+
+    class Both:  # the recorded run, its pantograph's contact answering for either name
+        t, q, system = recorded.t, recorded.q, recorded.system
+        summary = recorded.summary
+
+        @staticmethod
+        def contact(name):
+            assert name in ("pantograph.contact", "pantograph2.contact"), name
+            return force
+
+    design = CatenaryDesign(element_length=1.0, alpha=0.06, beta=7.6e-5, **RUN)
+    run = analyse_pantograph_run(Both, design, speed_kmh=250, start=single.x[0] + 1.0, spans=(2, 2),
+                                 trailing=(1.0,))
+    (row,), (behind,) = run.statistics["trailing"], run.trailing
+    assert row["spacing_m"] == 1.0 and row == dict(single.statistics, spacing_m=1.0)
+    np.testing.assert_array_equal(behind.filtered, single.filtered)
+    report_pantograph(run, tmp_path, figures=False)
+    stored = assert_unit_keys(tmp_path / "statistics.json")
+    assert stored["trailing"][0]["mean_N"] == single.statistics["mean_N"] and "mean_N" in stored
+    header = (tmp_path / "contact_force.csv").read_text().splitlines()[0]
+    assert header == ("t,x,contact_force_N,contact_force_filtered_N,pantograph2_x,pantograph2_contact_force_N,"
+                      "pantograph2_contact_force_filtered_N")
