@@ -741,7 +741,8 @@ class Checker:
         from .build import pantograph_run_time, pantograph_start
         if not pantograph_start(self.spec) < design.length:
             raise Invalid(("pantograph", "trailing"), f"{list(pan.trailing)} puts the leading pantograph past "
-                          f"the line's end {design.length:g} m", f"distances below {design.length:g} m")
+                          f"the line's end {design.length:g} m",
+                          f"distances below {design.length - 0.1 * design.droppers[0]:g} m (or a start)")
         try:
             pantograph_run_time(self.spec)
         except ModelError as e:
