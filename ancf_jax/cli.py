@@ -125,7 +125,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     run = sub.add_parser("run", help="simulate and write CSV/NPZ/JSON and figures",
                          description="Simulate a model and write results and figures "
-                                     "(default directory results/MODEL).")
+                                     "(default directory results/MODEL). A pantograph scenario with "
+                                     "--set 'pantograph.speed_kmh=[V1, V2, ...]' runs the speeds in one "
+                                     "vmapped batch (results in OUT/<V>kmh/ and OUT/speeds.csv).")
     common(run, "element count of the (single) beam; comma-separated counts run as one vmapped "
                 "batch (m1 default 6, m2 default 12,18,24)")
     run.add_argument("--t-end", type=_positive_float, default=None, help="end time [s]")
@@ -514,6 +516,9 @@ def _run(args) -> int:
         extra.append(f"solver.generalized_alpha.rho_inf={args.rho_inf!r}")
     if args.out is not None:
         _check_out(args.out)
+    speeds, rest = _speed_list(args.overrides)
+    if speeds is not None:
+        return _run_speeds(args, speeds, rest, extra)
     base, scs = _scenarios(args, default_many=True, extra=extra)
     settings = base.solver
     if args.rho_inf is not None and settings.solver != "generalized-alpha":
@@ -549,7 +554,8 @@ def _run(args) -> int:
         from .scenario.build import pantograph_start
         p, r = base.spec.pantograph, results[0]
         run = analyse_pantograph_run(r, base.spec.catenary.design(), speed_kmh=p.speed_kmh,
-                                     start=pantograph_start(base.spec), spans=p.spans, cutoff=p.cutoff)
+                                     start=pantograph_start(base.spec), spans=p.spans, cutoff=p.cutoff,
+                                     trailing=p.trailing or ())
         data = report_pantograph(run, out, figures=figures, precision=base.spec.outputs.precision)
         outside = [row["key"] for row in data["en50318_2002"] or () if not row["inside"]]
         ranges = ("" if data["en50318_2002"] is None else
@@ -571,6 +577,103 @@ def _run(args) -> int:
             name = base.name if k == "" or len(runs) == 1 else f"{base.name}_n{k}"
             print(f"VTK: {write_vtk(r, out / 'vtk', name=name)}")
     return _problems("run", runs)
+
+
+#: the scenario key that takes a list of speeds on the command line (``run``)
+SPEED_KEY = ("pantograph", "speed_kmh")
+
+
+def _speed_list(overrides):
+    """(speeds, the other overrides): the values of ``--set pantograph.speed_kmh=[V1,
+    V2, ...]`` (a TOML array; the last such item), or (None, overrides) without one."""
+    from .scenario.loader import parse_override
+    speeds, rest = None, []
+    for item in overrides:
+        try:
+            path, value = parse_override(item)
+        except ValueError:  # reported by the scenario's load
+            path, value = (), None
+        if path == SPEED_KEY and isinstance(value, list):
+            speeds = value
+        else:
+            rest.append(item)
+    return speeds, rest
+
+
+def _run_speeds(args, speeds, overrides, extra) -> int:
+    """``run MODEL --set pantograph.speed_kmh=[V1, V2, ...]``: one scenario per speed,
+    run as one vmapped batch (fixed-step solvers) to the longest speed's end, each
+    member cut at the output nearest its own end (the single-speed run's duration) and written to
+    ``OUT/<V>kmh/`` as a single-speed run writes ``OUT/``; ``OUT/speeds.csv`` holds
+    one row of statistics per speed."""
+    import numpy as np
+
+    from .models.catenary import STATISTICS_KEYS, analyse_pantograph_run
+    from .outputs import write_csv
+    from .reports import report_pantograph
+    from .scenario.build import pantograph_start
+    from .simulation import FIXED_STEP_SOLVERS, simulate_batch
+    key = ".".join(SPEED_KEY)
+    for given, flag in ((args.elements, "--elements"), (args.continue_from, "--continue-from")):
+        if given is not None:
+            raise _UsageError(f"argument {flag}: does not combine with a list of speeds (--set {key}=[...])")
+    if not speeds or len(speeds) > 64:
+        raise _UsageError(f"--set {key}={speeds!r}: expected an array of 1 to 64 speeds [km/h]")
+    scs = {}
+    for v in speeds:
+        value = float(v) if isinstance(v, (int, float)) and not isinstance(v, bool) else v
+        sc = _load(args.model, list(overrides) + list(extra) + [f"{key}={value!r}"])
+        if sc.spec.pantograph is None:
+            raise _UsageError(f"--set {key}=[...]: {sc.path} has no [pantograph] table")
+        label = f"{value:g}kmh"
+        if label in scs:
+            raise _UsageError(f"--set {key}={speeds!r}: {value:g} km/h is given twice")
+        scs[label] = sc
+    base = next(iter(scs.values()))
+    settings = base.solver
+    if settings.solver not in FIXED_STEP_SOLVERS:
+        raise _UsageError(f"--set {key}=[...]: a batch of speeds runs fixed-step solvers "
+                          f"({', '.join(FIXED_STEP_SOLVERS)}), not {settings.solver}")
+    if args.rho_inf is not None and settings.solver != "generalized-alpha":
+        raise _UsageError("argument --rho-inf: needs --solver generalized-alpha")
+    ends = {label: sc.solver.t_end for label, sc in scs.items()}
+    settings = dataclasses.replace(settings, t_end=max(ends.values()))
+    kw = settings.simulate_kwargs()
+    if args.locate_crossings:
+        kw["options"] = dataclasses.replace(kw["options"], locate_crossings=True)
+    kw.update(progress=False if args.no_progress else None, on_failure="return", limits=_limits(args))
+    out = _check_out(Path(args.out) if args.out is not None else Path("results") / base.name)
+    _check_size(args, scs, settings)
+    try:
+        built = [sc.build() for sc in scs.values()]
+        results = simulate_batch([b[0] for b in built], [b[1] for b in built], **kw)
+    except ModelError as e:
+        raise _UsageError(f"{base.path}: {e}") from None
+    rows, status = [], 0
+    for (label, sc), r in zip(scs.items(), results):
+        r = r.until(float(r.t[np.argmin(np.abs(np.asarray(r.t) - ends[label]))]))  # the output nearest its end
+        p = sc.spec.pantograph
+        run = analyse_pantograph_run(r, sc.spec.catenary.design(), speed_kmh=p.speed_kmh,
+                                     start=pantograph_start(sc.spec), spans=p.spans, cutoff=p.cutoff,
+                                     trailing=p.trailing or ())
+        data = report_pantograph(run, out / label, figures=not args.no_figures,
+                                 precision=base.spec.outputs.precision)
+        rows.append({k: data[k] for k in STATISTICS_KEYS if k != "spans_evaluated"})
+        print(f"{base.name}: {p.speed_kmh:g} km/h: contact force mean {data['mean_N']:.1f} N, std "
+              f"{data['std_N']:.1f} N, max {data['max_N']:.1f} N, min {data['min_N']:.1f} N, uplift "
+              f"{data['uplift_support_mm']:.1f} mm, loss {data['contact_loss_pct']:.1f} % -> {out / label}/")
+        if r.status != "ok":
+            print(f"ancf-jax run: {p.speed_kmh:g} km/h: {r.message} (results up to then are written)",
+                  file=sys.stderr)
+            status = 130 if r.status == "interrupted" else max(status, 1)
+        if args.vtk:
+            from .sweep.vtk import write_vtk
+            print(f"VTK: {write_vtk(r, out / label / 'vtk', name=f'{base.name}_{label}')}")
+    write_csv(out / "speeds.csv", {k: np.array([row[k] for row in rows], float) for k in rows[0]},
+              base.spec.outputs.precision)
+    print(f"{base.name}: {len(rows)} speeds in one vmapped batch; compile {results[0].compile_time_s:.1f} s, run "
+          f"{results[0].info.get('batch_wall_time_s', 0.0):.1f} s -> {out}/speeds.csv")
+    return status
 
 
 def _fatigue(args) -> int:

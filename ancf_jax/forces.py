@@ -37,6 +37,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
+from .functions import AbstractPath
 from .points import AbstractPoint
 
 
@@ -248,6 +249,43 @@ class PointForce(AbstractLoad):
     def applied_force(self, system, q, v, t):
         f = self.force if self.time_function is None else self.force * self.time_function(t)
         return point_load(system, self.point, q, f)
+
+    def coordinates(self, system, q, t):
+        return self.point.coordinates(system, q)
+
+
+class SpeedSquaredForce(AbstractLoad):
+    """A force (F₀ + c ṗ(t)²) e [N] at a point, fixed in direction: a static part plus
+    one growing with the square of the speed ṗ of a prescribed path (the uplift of a
+    pantograph, static plus aerodynamic, EN 50367: F = F₀ + c_aero v²).
+
+    The speed ṗ(t) is the path's time derivative by autodiff (for
+    :class:`~ancf_jax.functions.ConstantSpeed` without a profile: its ``speed``
+    leaf), so the force follows the path's data through a batch or a gradient over
+    the speed.
+
+    Attributes:
+        point: where it acts.
+        direction: e, shape (2,) (not normalized: F₀ e and c ṗ² e are the force).
+        static: F₀ [N].
+        coefficient: c [N/(m/s)² = N·s²/m²].
+        path: the path whose speed ṗ [m/s] enters (an
+            :class:`~ancf_jax.functions.AbstractPath`).
+    """
+
+    point: AbstractPoint
+    direction: jnp.ndarray
+    static: jnp.ndarray
+    coefficient: jnp.ndarray
+    path: AbstractPath
+
+    def magnitude(self, t):
+        """F₀ + c ṗ(t)² [N]."""
+        speed = jax.jvp(self.path, (jnp.asarray(t, float),), (jnp.ones(()),))[1]
+        return self.static + self.coefficient * speed ** 2
+
+    def applied_force(self, system, q, v, t):
+        return point_load(system, self.point, q, self.magnitude(t) * self.direction)
 
     def coordinates(self, system, q, t):
         return self.point.coordinates(system, q)

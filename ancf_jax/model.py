@@ -39,7 +39,7 @@ from .element.strain_energy import Formulation
 from .errors import ConstraintError, ModelError, VelocityProjectionWarning
 from .contact import AtArcLength, AtHorizontalPosition, ContactFriction, MovingForce, UnilateralContact
 from .forces import (AbstractForceSet, BeamMassLoad, BodyMassLoad, CompressionOnlySpringDamper, DirectedSpringDamper,
-                     NodeSpringSet, PointForce, PointTorque,
+                     NodeSpringSet, PointForce, PointTorque, SpeedSquaredForce,
                      SpringDamper, TensionOnlySpringDamper)
 from .linalg import AbstractChainLayout, InterleavedChain, SequentialChain, within_two_blocks
 from .mesh import BeamMesh, pad
@@ -524,6 +524,28 @@ class Model:
             raise ModelError(f"time_function of force {name!r} must be callable")
         self._claim(name, "force")
         self._forces.append(("point_force", name, dict(point=point, force=f, time_function=time_function)))
+        return name
+
+    def speed_squared_force(self, name: str, point: PointRef, *, static: float, coefficient: float, path,
+                            direction=(0.0, 1.0)) -> str:
+        """A force (F₀ + c ṗ²) e [N] at a point, ṗ [m/s] the speed of ``path`` (an
+        :class:`~ancf_jax.functions.AbstractPath`, e.g. the ``ConstantSpeed`` of a
+        moving chain: its data, so batches and gradients over the speed move the force
+        too): a pantograph's static plus aerodynamic uplift
+        (:class:`~ancf_jax.forces.SpeedSquaredForce`).
+
+        Args:
+            static: F₀ [N] (finite).
+            coefficient: c [N/(m/s)²] (finite).
+            direction: e, shape (2,) (default +y).
+        """
+        f0 = float(check_finite(f"static force of {name!r}", static))
+        c = float(check_finite(f"coefficient of force {name!r}", coefficient))
+        e = tuple(check_vector(f"direction of force {name!r}", direction, 2))
+        p = _as_path(f"path of force {name!r}", path)
+        self._claim(name, "force")
+        self._forces.append(("speed_squared_force", name, dict(point=point, static=f0, coefficient=c, path=p,
+                                                               direction=e)))
         return name
 
     def torque(self, name: str, body: str, torque: float, time_function=None) -> str:
@@ -1091,6 +1113,10 @@ class Model:
             if kind == "point_force":
                 forces.append(PointForce(name, resolve(a["point"], what), jnp.asarray(a["force"], float),
                                          a["time_function"]))
+            elif kind == "speed_squared_force":
+                forces.append(SpeedSquaredForce(name, resolve(a["point"], what), jnp.asarray(a["direction"], float),
+                                                jnp.asarray(a["static"], float), jnp.asarray(a["coefficient"], float),
+                                                a["path"]))
             elif kind == "torque":
                 forces.append(PointTorque(name, body_of(a["body"], what), jnp.asarray(a["torque"], float),
                                           a["time_function"]))

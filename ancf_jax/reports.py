@@ -226,11 +226,18 @@ def report_pantograph(run, out_dir: str | Path, *, figures: bool = True, precisi
     evaluated window and the run's diagnostics), ``contact_force.csv``
     (``t,x,contact_force_N,contact_force_filtered_N``) and figures: the contact force
     along the track, the contact wire's uplift at the poles and the droppers' slack
-    map (which dropper is slack where the pantograph is)."""
-    from .models.catenary import STATISTICS_KEYS, against_ranges
+    map (which dropper is slack where the pantograph is). With trailing pantographs
+    (all of the above is the leading one's): ``statistics.json`` adds ``trailing``,
+    one entry per trailing pantograph (``spacing_m`` and the same keys, null where it
+    did not reach the evaluated spans), and ``contact_force.csv`` the columns
+    ``pantograph<k>_x,pantograph<k>_contact_force_N,pantograph<k>_contact_force_filtered_N``
+    of each trailing pantograph k = 2, 3, … that reached them."""
+    from .models.catenary import STATISTICS_KEYS, against_ranges, pantograph_name
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     stats = {k: run.statistics[k] for k in STATISTICS_KEYS}
+    if "trailing" in run.statistics:
+        stats["trailing"] = run.statistics["trailing"]
     # the units convention (README, docs/scenario-format.md): the statistics' keys end
     # in their unit; what cannot carry one is in the units map
     units = {"spans_evaluated": "-", "value": "the unit of the row's key", "low": "the unit of the row's key",
@@ -238,8 +245,13 @@ def report_pantograph(run, out_dir: str | Path, *, figures: bool = True, precisi
     data = dict(stats, en50318_2002=against_ranges(stats), window_m=list(run.window),
                 run=run.results.summary(), units=units)
     _json(out / "statistics.json", data)
-    write_csv(out / "contact_force.csv", dict(t=run.t, x=run.x, contact_force_N=run.force,
-                                              contact_force_filtered_N=run.filtered), precision)
+    columns = dict(t=run.t, x=run.x, contact_force_N=run.force, contact_force_filtered_N=run.filtered)
+    for k, behind in enumerate(run.trailing):
+        if behind is not None:
+            name = pantograph_name(k + 2)
+            columns.update({f"{name}_x": behind.x, f"{name}_contact_force_N": behind.force,
+                            f"{name}_contact_force_filtered_N": behind.filtered})
+    write_csv(out / "contact_force.csv", columns, precision)
     if figures:
         plotting.pantograph_figures(run, out)
     return data

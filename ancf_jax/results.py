@@ -215,6 +215,18 @@ class Results:
     info: dict = dataclasses.field(default_factory=dict)
     checkpoint: Any = None
 
+    def until(self, t_end: float) -> "Results":
+        """These results at the output times t <= ``t_end`` [s] only (to 1e-9 of the
+        last output interval; the checkpoint dropped unless nothing is cut): a member
+        of a batch run to a common end, cut at its own."""
+        t = np.asarray(self.t)
+        step = float(np.max(np.diff(t), initial=0.0))
+        n = int(np.searchsorted(t, float(t_end) + 1e-9 * step, side="right"))
+        if n >= t.shape[0]:
+            return self
+        cut = {k: getattr(self, k)[:n] for k in ("t", "q", "v", "acc", "lam", "work", "iterations")}
+        return dataclasses.replace(self, checkpoint=None, **cut)
+
     # ------------------------------------------------------------------ lookup
     def _index(self, names: tuple, name: str, what: str) -> int:
         if name not in names:

@@ -10,6 +10,10 @@
 * A small two-span catenary with the pantograph: the filtered contact force and its
   statistics against the run of itself with half the elements and half the step,
   within what the convergence study measured.
+* The aerodynamic uplift F₀ + c v² and two pantographs on one wire: the static
+  balance of each pantograph (contact force = uplift − frame spring), Maxwell–Betti
+  reciprocity between the two, and a trailing pantograph that never reaches the line
+  leaving the leading one's run unchanged.
 
 Programs are shared: the static solves and the runs pad both wires to one element count.
 """
@@ -19,9 +23,9 @@ import numpy as np
 import pytest
 
 from ancf_jax.model import Model
-from ancf_jax.models.catenary import (G, WIRE_FORMULATION, CatenaryDesign, PantographDesign, contact_statistics,
-                                      design_equilibrium, moving_equilibrium, pantograph_catenary,
-                                      run_pantograph_catenary)
+from ancf_jax.models.catenary import (G, STATISTICS_KEYS, WIRE_FORMULATION, CatenaryDesign, PantographDesign,
+                                      contact_statistics, design_equilibrium, moving_equilibrium, pantograph_catenary,
+                                      pantograph_name, run_pantograph_catenary)
 
 from .beam_theory import moving_load_series
 
@@ -199,3 +203,179 @@ def test_shipped_scenario_is_the_python_model_and_the_cli_writes_the_contract(sm
     assert header == "t,x,contact_force_N,contact_force_filtered_N"
     for fig in ("contact_force.png", "uplift.png", "dropper_slack.png"):
         assert (tmp_path / fig).stat().st_size > 0
+
+
+def _static(design, pantograph, *, speed, start=None, trailing=(), uplifts=None):
+    """Static state at t = 0 of the small catenary's model (the tests' program: 60
+    element slots): (system, built state, solved state); ``uplifts``: F₀ of each
+    pantograph, set in the built system's data."""
+    import equinox as eqx
+    m, _ = pantograph_catenary(design, pantograph, speed=speed, start=start, trailing=trailing)
+    system, guess = m.build(assemble=False, pad_to=60)
+    if uplifts is not None:
+        for k, f in enumerate(uplifts):
+            i = next(j for j, e in enumerate(system.forces) if e.name == f"{pantograph_name(k + 1)}.uplift")
+            system = eqx.tree_at(lambda s: s.forces[i].static, system, jnp.asarray(f, float))
+    state, _ = moving_equilibrium(system, guess)
+    return system, guess, state
+
+
+def _balance(system, guess, state, name):
+    """(vertical contact force on the head [N], frame rise Δy₁ [m], uplift [N]) of
+    pantograph ``name`` in a static state. The contact force acts along the wire's
+    normal: its vertical part is F_n cos θ (θ the wire's slope, ~1.5e-3 rad here, so
+    1.2e-6 F_n less than F_n); the prescribed x of the head takes the rest."""
+    contact = next(f for f in system.forces if f.name == f"{name}.contact")
+    uplift = next(f for f in system.forces if f.name == f"{name}.uplift")
+    iy = system.body_offset(system.body_names.index(f"{name}.1")) + 1
+    head = system.body_offset(system.body_names.index(f"{name}.{len(PantographDesign().masses)}")) + 1
+    q0 = jnp.zeros_like(state.q)
+    return (-float(contact.generalized_force(system, state.q, q0, 0.0)[head]),
+            float(state.q[iy] - guess.q[iy]), float(uplift.magnitude(0.0)))
+
+
+def test_aerodynamic_uplift_shifts_the_static_balance():
+    """The uplift F₀ + c v² (EN 50367's AC curve, c = 0.00097 · 3.6² N/(m/s)², 48.6 N
+    at 250 km/h) in the static state at t = 0: the chain's masses carry no weight, so
+    its balance is contact force = F₀ + c v² − k₁ Δy₁ (the frame spring) exactly, and
+    the contact force rises by c v² less the frame spring's share. The force reads the
+    path's speed leaf: setting the pantograph's speed (``speed.pantograph``) moves it,
+    with dF/dv = 2 c v by autodiff. (Balance to the static solve's round-off: 3e-11 N
+    measured.)"""
+    import jax
+
+    from ancf_jax.identification.parameters import resolve
+    design = CatenaryDesign(element_length=1.0, alpha=0.06, beta=7.6e-5, **RUN)
+    v, c = 250 / 3.6, 0.00097 * 3.6 ** 2
+    k1 = PantographDesign().stiffness[0]
+    forces = []
+    for coefficient in (0.0, c):
+        system, guess, state = _static(design, PantographDesign(aero_coefficient=coefficient), speed=v)
+        fc, dy, uplift = _balance(system, guess, state, "pantograph")
+        assert uplift == pytest.approx(100.0 + coefficient * v * v, rel=1e-15)
+        assert abs(fc - (uplift - k1 * dy)) < 1e-8, (fc, uplift, k1 * dy)
+        forces.append((fc, dy))
+    (f0, y0), (f1, y1) = forces
+    assert f1 - f0 == pytest.approx(c * v * v - k1 * (y1 - y0), abs=1e-8)
+    assert 0.9 * c * v * v < f1 - f0 < c * v * v  # the frame spring takes a few per cent
+    speed = resolve(system, "speed.pantograph")[0]
+
+    def uplift_at(w):
+        return next(f for f in speed.set(system, w).forces if f.name == "pantograph.uplift").magnitude(0.0)
+    assert float(uplift_at(300 / 3.6)) == pytest.approx(100.0 + c * (300 / 3.6) ** 2, rel=1e-14)
+    assert float(jax.grad(uplift_at)(v)) == pytest.approx(2 * c * v, rel=1e-14)
+
+
+def test_two_pantographs_share_the_wire_statically():
+    """Two pantographs at rest on the small catenary, 7 m apart between droppers
+    (x = 6.5 and 13.5 m): each one's static balance holds (contact force = uplift −
+    k₁ Δy₁), and the pair obeys Maxwell–Betti reciprocity: 1 N more uplift on one
+    raises the other's frame as much as 1 N more on the other raises the one's (the
+    tangent stiffness of a conservative system is symmetric; measured 7.9e-7 relative
+    at 1 N and 4.0e-7 at 0.5 N: the finite step's own error, first order in it; B's
+    frame rises by 4.7 % of A's own rise)."""
+    design = CatenaryDesign(element_length=1.0, alpha=0.06, beta=7.6e-5, **RUN)
+    kw = dict(speed=0.0, start=13.5, trailing=(7.0,))
+    names = ("pantograph", pantograph_name(2))
+    k1 = PantographDesign().stiffness[0]
+    rises = {}
+    for uplifts in ((100.0, 100.0), (101.0, 100.0), (100.0, 101.0)):
+        system, guess, state = _static(design, PantographDesign(), uplifts=uplifts, **kw)
+        balance = [_balance(system, guess, state, n) for n in names]
+        for (fc, dy, uplift), f in zip(balance, uplifts):
+            assert uplift == f and abs(fc - (uplift - k1 * dy)) < 1e-8, (fc, uplift, dy)
+        rises[uplifts] = np.array([dy for _, dy, _ in balance])
+    base = rises[(100.0, 100.0)]
+    ab = rises[(101.0, 100.0)][1] - base[1]  # B's rise per N on A
+    ba = rises[(100.0, 101.0)][0] - base[0]  # A's rise per N on B
+    assert ab > 0 and abs(ab - ba) < 1e-5 * ab, (ab, ba)
+
+
+def test_a_trailing_pantograph_off_the_line_leaves_the_leading_run_unchanged(small_runs):
+    """A trailing pantograph 30 m behind, off the line for the whole run (it would
+    enter at x = 0 only after the run's end), does not touch the wire: the leading
+    pantograph's force and statistics are those of the single-pantograph run (the
+    same mesh, step and start) to round-off, and the trailing one has no statistics.
+    A start that lets it enter the line during the run is refused."""
+    from ancf_jax.errors import ModelError
+    design = CatenaryDesign(element_length=1.0, alpha=0.06, beta=7.6e-5, **RUN)
+    single = small_runs[1.0]
+    both = run_pantograph_catenary(design, speed_kmh=250, dt=1e-3, pad_to=60, t_end=0.4, spans=(2, 2),
+                                   chunks=1, start=0.2, trailing=(30.0,))
+    np.testing.assert_allclose(both.force, single.force, rtol=0, atol=1e-9)
+    for key in STATISTICS_KEYS:
+        assert both.statistics[key] == pytest.approx(single.statistics[key], rel=1e-10, abs=1e-9), key
+    (row,), (run,) = both.statistics["trailing"], both.trailing
+    assert run is None and row["spacing_m"] == 30.0 and row["mean_N"] is None
+    with pytest.raises(ModelError, match="pantograph2 starts off the line"):
+        run_pantograph_catenary(design, speed_kmh=250, start=0.2, trailing=(20.0,), t_end=0.4)
+
+
+def test_a_list_of_speeds_on_the_command_line_is_read_and_checked(tmp_path, capsys):
+    """``--set pantograph.speed_kmh=[...]`` is taken as a batch of speeds (the other
+    overrides kept), and its misuses are one-line usage errors before anything is
+    built: a speed given twice, --elements, a speed outside the key's range, a
+    trailing pantograph that the run would take onto the line."""
+    from ancf_jax.cli import _speed_list, main
+    assert _speed_list(["catenary.spans=3", "pantograph.speed_kmh=[250, 300.0]"]) == ([250, 300.0],
+                                                                                      ["catenary.spans=3"])
+    assert _speed_list(["pantograph.speed_kmh=300"]) == (None, ["pantograph.speed_kmh=300"])
+    out = str(tmp_path / "out")
+    for extra, message in ((["--set", "pantograph.speed_kmh=[250, 250.0]"], "250 km/h is given twice"),
+                           (["--set", "pantograph.speed_kmh=[250]", "--elements", "4"], "argument --elements"),
+                           (["--set", "pantograph.speed_kmh=[250, 700]"], "pantograph.speed_kmh"),
+                           (["--set", "pantograph.speed_kmh=[250]", "--set", "pantograph.start=100.0",
+                             "--set", "pantograph.trailing=[150.0]"], "pantograph2 starts off the line")):
+        assert main(["run", "pantograph_catenary", "--out", out, *extra]) == 2, extra
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and message in err[0], err
+
+
+def test_results_until_cuts_every_history():
+    """Results.until keeps the outputs at t <= t_end (to 1e-9 of a step) in every
+    history, and is the results themselves when nothing is cut."""
+    from ancf_jax.results import Results
+    t = np.arange(6) * 0.1
+    arrays = {k: np.arange(12.0).reshape(6, 2) for k in ("q", "v", "acc", "lam", "work")}
+    r = Results(None, t, iterations=np.arange(6), checkpoint="end", **arrays)
+    cut = r.until(0.3 + 1e-12)
+    assert cut.t.shape == (4,) and cut.q.shape == cut.work.shape == (4, 2) and cut.iterations.shape == (4,)
+    assert cut.checkpoint is None and r.until(0.5) is r and r.until(0.29).t[-1] == pytest.approx(0.2)
+
+
+def test_trailing_statistics_and_report(small_runs, tmp_path):
+    """The trailing pantograph's analysis and files, on the recorded single run: its
+    contact force taken as both pantographs' (a stand-in results object), the leading
+    one 1 m ahead of the recorded start, so the trailing one is the recorded
+    pantograph: its statistics are the single run's, under ``trailing`` with
+    ``spacing_m``; statistics.json keeps the leading keys and its units convention, and
+    contact_force.csv adds the trailing columns."""
+    from ancf_jax.models.catenary import analyse_pantograph_run
+    from ancf_jax.reports import report_pantograph
+
+    from .json_units import assert_unit_keys
+    single = small_runs[1.0]
+    recorded = single.results
+    force = recorded.contact("pantograph.contact")
+
+    class Both:  # the recorded run, its pantograph's contact answering for either name
+        t, q, system = recorded.t, recorded.q, recorded.system
+        summary = recorded.summary
+
+        @staticmethod
+        def contact(name):
+            assert name in ("pantograph.contact", "pantograph2.contact"), name
+            return force
+
+    design = CatenaryDesign(element_length=1.0, alpha=0.06, beta=7.6e-5, **RUN)
+    run = analyse_pantograph_run(Both, design, speed_kmh=250, start=single.x[0] + 1.0, spans=(2, 2),
+                                 trailing=(1.0,))
+    (row,), (behind,) = run.statistics["trailing"], run.trailing
+    assert row["spacing_m"] == 1.0 and row == dict(single.statistics, spacing_m=1.0)
+    np.testing.assert_array_equal(behind.filtered, single.filtered)
+    report_pantograph(run, tmp_path, figures=False)
+    stored = assert_unit_keys(tmp_path / "statistics.json")
+    assert stored["trailing"][0]["mean_N"] == single.statistics["mean_N"] and "mean_N" in stored
+    header = (tmp_path / "contact_force.csv").read_text().splitlines()[0]
+    assert header == ("t,x,contact_force_N,contact_force_filtered_N,pantograph2_x,pantograph2_contact_force_N,"
+                      "pantograph2_contact_force_filtered_N")

@@ -136,14 +136,19 @@ class Parameter:
 
 def _paths(system: System, name: str) -> tuple:
     """The ConstantSpeed paths that move the moving force, moving mass or chain
-    ``name`` (a moving mass's ``NAME.drive``, a chain's ``NAME.i.x``), in system order."""
+    ``name`` (a moving mass's ``NAME.drive``, a chain's ``NAME.i.x``), in system order,
+    and those of the forces ``NAME.…`` that grow with its speed
+    (:class:`~ancf_jax.forces.SpeedSquaredForce`)."""
     from ..contact import MovingForce
+    from ..forces import SpeedSquaredForce
     from ..functions import ConstantSpeed
     from ..joints import PathCoordinate
 
     found = [f.location.path for f in system.forces if isinstance(f, MovingForce) and f.name == name]
     found += [c.path for c in system.constraints if isinstance(c, PathCoordinate)
               and (c.name == f"{name}.drive" or (c.name.startswith(f"{name}.") and c.name.endswith(".x")))]
+    if found:  # a force growing with the chain's speed (a pantograph's aerodynamic uplift) follows it
+        found += [f.path for f in system.forces if isinstance(f, SpeedSquaredForce) and f.name.startswith(f"{name}.")]
     found = [p for p in found if isinstance(p, ConstantSpeed)]
     if not found:
         raise ModelError(f"parameter speed.{name}: no moving force, moving mass or chain named {name!r} "

@@ -173,9 +173,14 @@ class PantographDesign:
         masses: m_i [kg] > 0.
         stiffness: k_i [N/m] >= 0 of the stage below each mass (stage 1: to the roof).
         damping: c_i [N·s/m] >= 0 likewise.
-        uplift: static uplift force on the bottom mass [N] > 0 (the pantograph's
+        uplift: static uplift force F₀ on the bottom mass [N] > 0 (the pantograph's
             masses carry no weight: the uplift is the net static force, the mean
             contact force at rest).
+        aero_coefficient: aerodynamic uplift coefficient c_aero [N/(m/s)²], finite
+            (negative: a downforce): the uplift at speed v is F₀ + c_aero v² (EN 50367's
+            form of the mean contact force; e.g. its AC curve 70 + 0.00097 v² with v in
+            km/h is c_aero = 0.00097 · 3.6² = 0.0126 N/(m/s)²). Default 0: no
+            aerodynamic part.
         contact_stiffness: penalty stiffness of the head–wire contact [N/m] > 0.
         contact_damping: its damping [N·s/m] >= 0.
         spacing: height of each mass above the one below (above the roof for the
@@ -186,6 +191,7 @@ class PantographDesign:
     stiffness: tuple = (160.0, 15500.0, 7000.0)
     damping: tuple = (0.0, 0.0, 0.0)
     uplift: float = 100.0
+    aero_coefficient: float = 0.0
     contact_stiffness: float = 5.0e4
     contact_damping: float = 0.0
     spacing: float = 0.5
@@ -206,6 +212,13 @@ class PantographDesign:
             v = getattr(self, name)
             if not (math.isfinite(v) and (v > 0 if pos else v >= 0)):
                 raise ModelError(f"pantograph {name} must be finite and {'> 0' if pos else '>= 0'}, got {v!r}")
+        if not (isinstance(self.aero_coefficient, (int, float)) and math.isfinite(self.aero_coefficient)):
+            raise ModelError(f"pantograph aero_coefficient must be a finite number [N/(m/s)^2], got "
+                             f"{self.aero_coefficient!r}")
+
+    def total_uplift(self, speed):
+        """F₀ + c_aero v² [N] at speed v [m/s] (a number or traced data)."""
+        return self.uplift + self.aero_coefficient * speed ** 2
 
 
 # ---------------------------------------------------------------------- design by hand
@@ -552,22 +565,27 @@ def add_pantograph(model, catenary: CatenaryNames, design: PantographDesign = Pa
                    start: float, speed, name: str = "pantograph") -> tuple[str, ...]:
     """A lumped-mass pantograph (``"<name>.1"`` … at the bottom … the head on top)
     moving at x = ``start`` + ``speed`` t [m, m/s] under the catenary's contact wire,
-    with the static uplift on the bottom mass and a unilateral penalty contact
+    with the uplift F₀ + c_aero v² on the bottom mass (``"<name>.uplift"``, a
+    :class:`~ancf_jax.forces.SpeedSquaredForce` on the chain's path: static plus
+    aerodynamic, :class:`PantographDesign`) and a unilateral penalty contact
     ``"<name>.contact"`` between the head and the wire. The chain is built unstressed
-    with the head on the wire at its design height: solve the statics for the
-    pressed state (:func:`~ancf_jax.model.build_in_equilibrium` or
+    with the head on the wire at its design height (at the line's end height if it
+    starts off the line): solve the statics for the pressed state
+    (:func:`~ancf_jax.model.build_in_equilibrium` or
     :func:`~ancf_jax.statics.solve_static`). Returns the mass names, bottom first.
-    ``speed`` may be traced data (a batch over speeds)."""
+    ``speed`` may be traced data (a batch over speeds; the path's ``speed`` leaf,
+    which the uplift reads too)."""
     from ..model import body_point
     design.check()
     top = float(contact_wire_height(catenary.design, start))
     n = len(design.masses)
     heights = design.spacing * np.arange(1, n + 1)
     base = (float(start), top - heights[-1])
-    forces = [design.uplift] + [0.0] * (n - 1)
+    path = ConstantSpeed(float(start), speed)
     names = model.lumped_chain(name, base=base, heights=heights, masses=design.masses,
-                               stiffness=design.stiffness, damping=design.damping, forces=forces,
-                               path=ConstantSpeed(float(start), speed), gravity=False)
+                               stiffness=design.stiffness, damping=design.damping, path=path, gravity=False)
+    model.speed_squared_force(f"{name}.uplift", body_point(names[0]), static=design.uplift,
+                              coefficient=design.aero_coefficient, path=path)
     model.contact(f"{name}.contact", body_point(names[-1]), catenary.contact,
                   stiffness=design.contact_stiffness, damping=design.contact_damping, side=-1)
     return tuple(names)
@@ -622,25 +640,80 @@ def contact_statistics(t, x, force, *, window, cutoff: float = CUTOFF, uplift=No
 
 
 # ---------------------------------------------------------------------- the coupled model
-#: the pantograph's name in :func:`pantograph_catenary` (its contact: ``"pantograph.contact"``)
+#: the (leading) pantograph's name in :func:`pantograph_catenary` (its contact:
+#: ``"pantograph.contact"``); trailing pantographs are :func:`pantograph_name` 2, 3, …
 PANTOGRAPH = "pantograph"
 
 
+def pantograph_name(k: int) -> str:
+    """Name of the k-th pantograph (1: the leading one, ``"pantograph"``; k >= 2:
+    the trailing ones, ``"pantograph2"`` …)."""
+    return PANTOGRAPH if k == 1 else f"{PANTOGRAPH}{k}"
+
+
+def check_trailing(trailing) -> tuple[float, ...]:
+    """The trailing pantographs' distances behind the leading one [m]: increasing
+    numbers > 0 (a one-line :class:`~ancf_jax.errors.ModelError` otherwise)."""
+    d = tuple(float(v) for v in trailing)
+    if not all(math.isfinite(v) and v > 0 for v in d) or any(b <= a for a, b in zip(d, d[1:])):
+        raise ModelError(f"pantograph trailing must be increasing distances > 0 m behind the leading "
+                         f"pantograph, got {list(trailing)}")
+    return d
+
+
+def default_start(catenary: CatenaryDesign, trailing=()) -> float:
+    """x of the leading pantograph at t = 0 [m] by default: the last pantograph at a
+    tenth of the first dropper's distance from the first pole, the others
+    ``trailing`` [m] ahead of it."""
+    return 0.1 * float(catenary.droppers[0]) + (max(trailing) if len(trailing) else 0.0)
+
+
 def pantograph_catenary(catenary: CatenaryDesign = CatenaryDesign(), pantograph: PantographDesign = PantographDesign(),
-                        *, speed, start: float | None = None):
+                        *, speed, start: float | None = None, trailing=()):
     """A model of a pantograph running at ``speed`` [m/s] (may be traced data) under a
-    catenary, from ``start`` [m] (default: a tenth of the first dropper's distance
-    from the first pole). Returns
+    catenary, from ``start`` [m] (:func:`default_start`), and of trailing pantographs
+    of the same design ``trailing`` [m] behind it (:func:`check_trailing`; e.g.
+    (200.0,): double traction), named :func:`pantograph_name` 2, 3, … each with its own
+    contact on the contact wire. The leading pantograph starts inside the line; a
+    trailing one may start behind it (x <= 0: no contact, its head standing free
+    above the wire's end height; :func:`pantograph_run_time` refuses a run that takes
+    it onto the line). Returns
     ``(model, names)``: build with ``model.build(assemble=False)`` and start from
     :func:`moving_equilibrium` (the design state is consistent with every joint)."""
     from ..model import Model
+    trailing = check_trailing(trailing)
     m = Model(gravity=(0.0, -G))
     names = add_catenary(m, catenary)
-    x0 = 0.1 * float(catenary.droppers[0]) if start is None else float(start)
+    x0 = default_start(catenary, trailing) if start is None else float(start)
     if not 0.0 < x0 < catenary.length:
         raise ModelError(f"pantograph start must be inside the line (0, {catenary.length:g}) m, got {x0!r}")
-    add_pantograph(m, names, pantograph, start=x0, speed=speed, name=PANTOGRAPH)
+    for k, d in enumerate((0.0,) + trailing):
+        add_pantograph(m, names, pantograph, start=x0 - d, speed=speed, name=pantograph_name(k + 1))
     return m, names
+
+
+def pantograph_run_time(catenary: CatenaryDesign, *, start: float, speed: float, trailing=(), spans=None,
+                        cutoff: float = CUTOFF, t_end: float | None = None) -> float:
+    """Duration [s] of a run: until the last pantograph is one span (at least
+    3 / ``cutoff`` seconds of travel: the filter's margin) past the evaluated spans
+    (:func:`evaluated_spans`), or the leading one half the first dropper distance
+    before the last pole, whichever comes first (or at ``t_end`` [s] if earlier).
+    ``start``: the leading pantograph's x at t = 0 [m], ``speed`` [m/s] > 0. Raises a
+    :class:`~ancf_jax.errors.ModelError` if a trailing pantograph starting off the
+    line (x <= 0) would reach it before the end."""
+    trailing = check_trailing(trailing)
+    _, last = evaluated_spans(catenary, spans)
+    x_last = last * catenary.span_length + max(catenary.span_length, 3.0 * speed / cutoff)
+    x_lead = catenary.length - 0.5 * catenary.droppers[0]
+    back = max(trailing) if trailing else 0.0
+    natural = min(x_last - (start - back), x_lead - start) / speed
+    t_end = natural if t_end is None else min(float(t_end), natural)
+    for k, d in enumerate(trailing):
+        if start - d <= 0.0 < start - d + speed * t_end:
+            raise ModelError(f"{pantograph_name(k + 2)} starts off the line (x = {start - d:g} m) and would "
+                             f"reach it at t = {(d - start) / speed:g} s, before the run ends ({t_end:g} s): "
+                             f"its free head stands above the wire; start it on the line (start > {d:g} m)")
+    return t_end
 
 
 def moving_equilibrium(system, guess, *, load_steps: int = 2):
@@ -679,7 +752,13 @@ class PantographRun:
         uplift: contact-wire uplift at the poles of the evaluated spans [m], shape
             (N, p) (y − y at t = 0).
         window: the evaluated stretch of track (x_from, x_to) [m].
-        statistics: :func:`contact_statistics` (without ``filtered``).
+        statistics: :func:`contact_statistics` (without ``filtered``); with trailing
+            pantographs also ``trailing``: one dict per trailing pantograph,
+            ``spacing_m`` [m] and its own :data:`STATISTICS_KEYS` (None if it did not
+            reach the evaluated spans).
+        trailing: the trailing pantographs' :class:`PantographRun` (their own x, force
+            and window; None where it did not reach the evaluated spans), in the order
+            of ``trailing``.
     """
 
     results: object
@@ -690,6 +769,7 @@ class PantographRun:
     uplift: np.ndarray
     window: tuple
     statistics: dict
+    trailing: tuple = ()
 
 
 def evaluated_spans(design: CatenaryDesign, spans=None) -> tuple[int, int]:
@@ -705,19 +785,21 @@ def evaluated_spans(design: CatenaryDesign, spans=None) -> tuple[int, int]:
 
 
 def analyse_pantograph_run(results, design: CatenaryDesign, *, speed_kmh: float, start: float, spans=None,
-                           cutoff: float = CUTOFF) -> PantographRun:
+                           cutoff: float = CUTOFF, trailing=(), name: str = PANTOGRAPH) -> PantographRun:
     """The statistics of EN 50318 of a run of :func:`pantograph_catenary` (or of the
-    scenario tables): contact force of ``"pantograph.contact"`` at the outputs, the
+    scenario tables): contact force of ``"<name>.contact"`` at the outputs, the
     pantograph at x = start + v t, the contact wire's uplift at the poles of the
     evaluated spans. The window ends at least 3 / ``cutoff`` seconds of travel before
-    the run does (the zero-phase filter's end transient)."""
+    the run does (the zero-phase filter's end transient). ``trailing``: the trailing
+    pantographs' distances behind the leading one [m], each analysed alike over the
+    same spans (``statistics["trailing"]``, ``PantographRun.trailing``)."""
     first, last = evaluated_spans(design, spans)
     L = design.span_length
     t = np.asarray(results.t)
     v = speed_kmh / 3.6
     x = float(start) + v * t
     window = ((first - 1) * L, min(last * L, float(x[-1]) - 3.0 * v / cutoff))
-    force = np.asarray(results.contact(f"{PANTOGRAPH}.contact")[:, 0])
+    force = np.asarray(results.contact(f"{name}.contact")[:, 0])
     system = results.system
     eq = design_equilibrium(design)
     poles = eq.pole_nodes[first - 1:last + 1]
@@ -727,7 +809,19 @@ def analyse_pantograph_run(results, design: CatenaryDesign, *, speed_kmh: float,
     stats = contact_statistics(t, x, force, window=window, cutoff=cutoff, uplift=uplift.max(),
                                speed_kmh=float(speed_kmh), spans_evaluated=[first, last])
     filtered = stats.pop("filtered")
-    return PantographRun(results, t, x, force, filtered, uplift, window, stats)
+    behind, rows = [], []
+    for k, d in enumerate(check_trailing(trailing)):
+        if float(start) - d + v * t[-1] - 3.0 * v / cutoff < window[0]:
+            behind.append(None)  # it did not reach the evaluated spans
+            rows.append(dict({key: None for key in STATISTICS_KEYS}, spacing_m=d, speed_kmh=float(speed_kmh),
+                             spans_evaluated=[first, last]))
+            continue
+        behind.append(analyse_pantograph_run(results, design, speed_kmh=speed_kmh, start=float(start) - d,
+                                             spans=spans, cutoff=cutoff, name=pantograph_name(k + 2)))
+        rows.append(dict(spacing_m=d, **behind[-1].statistics))
+    if rows:
+        stats["trailing"] = rows
+    return PantographRun(results, t, x, force, filtered, uplift, window, stats, tuple(behind))
 
 
 def run_pantograph_catenary(catenary: CatenaryDesign = CatenaryDesign(),
@@ -735,33 +829,36 @@ def run_pantograph_catenary(catenary: CatenaryDesign = CatenaryDesign(),
                             dt: float = RUN_DT, output_dt: float | None = None, spans=None,
                             cutoff: float = CUTOFF, solver=DEFAULT_SOLVER,
                             pad_to: int | None = None, t_end: float | None = None,
-                            chunks: int | None = None) -> PantographRun:
+                            chunks: int | None = None, start: float | None = None,
+                            trailing=()) -> PantographRun:
     """Run a pantograph along a catenary at ``speed_kmh`` and compute the statistics
     of EN 50318 over the evaluated ``spans`` (:func:`evaluated_spans`,
     :func:`analyse_pantograph_run`): from the static equilibrium at the start
-    (:func:`moving_equilibrium`) until one span past the evaluated ones (the filter's
-    margin) or half the first dropper distance before the last pole (``t_end``: an
-    earlier end). ``pad_to``: element slots of both wires; with it, equal ``t_end``,
-    ``output_dt = dt`` and ``chunks`` in proportion to the step count, runs of
-    different meshes and steps share one compiled program."""
+    (:func:`moving_equilibrium`) for :func:`pantograph_run_time` (``t_end``: an
+    earlier end). ``start``, ``trailing``: the leading pantograph's x at t = 0 [m]
+    and the trailing pantographs' distances behind it [m]
+    (:func:`pantograph_catenary`). ``pad_to``: element slots of both wires; with it,
+    equal ``t_end``, ``output_dt = dt`` and ``chunks`` in proportion to the step
+    count, runs of different meshes and steps share one compiled program."""
     from ..integrate import RunLimits
     from ..simulation import simulate
     if not (isinstance(speed_kmh, (int, float)) and 0 < speed_kmh <= 600):
         raise ModelError(f"speed_kmh must be a number in (0, 600] km/h, got {speed_kmh!r}")
-    _, last = evaluated_spans(catenary, spans)
+    evaluated_spans(catenary, spans)
     v = speed_kmh / 3.6
     if not 0 < cutoff:
         raise ModelError(f"cutoff must be a frequency > 0 Hz, got {cutoff!r}")
-    model, _ = pantograph_catenary(catenary, pantograph, speed=v)
+    trailing = check_trailing(trailing)
+    x0 = default_start(catenary, trailing) if start is None else float(start)
+    span = pantograph_run_time(catenary, start=x0, speed=v, trailing=trailing, spans=spans, cutoff=cutoff,
+                               t_end=t_end)
+    model, _ = pantograph_catenary(catenary, pantograph, speed=v, start=x0, trailing=trailing)
     system, guess = model.build(assemble=False, pad_to=pad_to)
     state, _ = moving_equilibrium(system, guess)
-    x0 = float(state.q[system.body_offset(0)])
-    x_end = min(last * catenary.span_length + max(catenary.span_length, 3.0 * v / cutoff),
-                catenary.length - 0.5 * catenary.droppers[0])
-    span = (x_end - x0) / v if t_end is None else min(float(t_end), (x_end - x0) / v)
     res = simulate(system, state, t_end=span, dt=dt, output_dt=output_dt or dt, solver=solver, progress=None,
                    limits=RunLimits(chunks=chunks))
-    return analyse_pantograph_run(res, catenary, speed_kmh=speed_kmh, start=x0, spans=spans, cutoff=cutoff)
+    return analyse_pantograph_run(res, catenary, speed_kmh=speed_kmh, start=x0, spans=spans, cutoff=cutoff,
+                                  trailing=trailing)
 
 
 #: EN 50318:2002 acceptance ranges of the reference model's statistics, by speed

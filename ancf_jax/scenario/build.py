@@ -133,23 +133,23 @@ def initial_nodes(beam: S.BeamSpec, mesh: _mesh.BeamMesh, length: float):
 
 
 def pantograph_start(spec: S.ScenarioSpec) -> float:
-    """x of the pantograph at t = 0 [m]: ``pantograph.start`` or a tenth of the first
-    dropper's distance from the first pole."""
+    """x of the (leading) pantograph at t = 0 [m]: ``pantograph.start`` or
+    :func:`~ancf_jax.models.catenary.default_start` (the last pantograph at a tenth of
+    the first dropper's distance from the first pole)."""
+    from ..models.catenary import default_start
     p = spec.pantograph
-    return 0.1 * float(spec.catenary.droppers[0]) if p.start is None else float(p.start)
+    return default_start(spec.catenary.design(), p.trailing or ()) if p.start is None else float(p.start)
 
 
 def pantograph_run_time(spec: S.ScenarioSpec) -> float:
-    """Time [s] for the pantograph to reach one span (at least 3 / cutoff seconds of
-    travel) past the evaluated spans, or half the first dropper distance before the
-    line's end."""
-    from ..models.catenary import evaluated_spans
-    design = spec.catenary.design()
-    _, last = evaluated_spans(design, spec.pantograph.spans)
-    v = spec.pantograph.speed_kmh / 3.6
-    x_end = min(last * design.span_length + max(design.span_length, 3.0 * v / spec.pantograph.cutoff),
-                design.length - 0.5 * design.droppers[0])
-    return (x_end - pantograph_start(spec)) / v
+    """Duration [s] of a pantograph run (:func:`~ancf_jax.models.catenary.pantograph_run_time`:
+    the last pantograph one span, at least 3 / cutoff seconds of travel, past the
+    evaluated spans, or the leading one half the first dropper distance before the
+    line's end)."""
+    from ..models.catenary import pantograph_run_time as run_time
+    p = spec.pantograph
+    return run_time(spec.catenary.design(), start=pantograph_start(spec), speed=p.speed_kmh / 3.6,
+                    trailing=p.trailing or (), spans=p.spans, cutoff=p.cutoff, t_end=spec.solver.t_end)
 
 
 def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
@@ -205,14 +205,16 @@ def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
                            damping=c.damping, forces=c.forces, path=path, gravity=c.gravity)
 
     if spec.catenary is not None:
-        from ..models.catenary import PANTOGRAPH, add_catenary, add_pantograph
+        from ..models.catenary import add_catenary, add_pantograph, pantograph_name
         with _located(file, ("catenary",)):
             names = add_catenary(m, spec.catenary.design())
         if spec.pantograph is not None:
             p = spec.pantograph
             with _located(file, ("pantograph",)):
-                add_pantograph(m, names, p.design(), start=pantograph_start(spec), speed=p.speed_kmh / 3.6,
-                               name=PANTOGRAPH)
+                x0 = pantograph_start(spec)
+                for k, d in enumerate((0.0,) + tuple(p.trailing or ())):
+                    add_pantograph(m, names, p.design(), start=x0 - d, speed=p.speed_kmh / 3.6,
+                                   name=pantograph_name(k + 1))
 
     for name, j in spec.joints.items():
         with _located(file, ("joints", name)):

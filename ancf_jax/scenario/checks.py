@@ -731,6 +731,23 @@ class Checker:
         if pan.spans is not None and not (len(pan.spans) == 2 and 1 <= pan.spans[0] <= pan.spans[1] <= design.spans):
             raise Invalid(("pantograph", "spans"), f"{list(pan.spans)}",
                           f"[first, last] with 1 <= first <= last <= {design.spans}")
+        if pan.trailing is not None:
+            from ..models.catenary import check_trailing
+            try:
+                check_trailing(pan.trailing)
+            except ModelError:
+                raise Invalid(("pantograph", "trailing"), f"{list(pan.trailing)}",
+                              "increasing distances > 0 m behind the leading pantograph") from None
+        from .build import pantograph_run_time, pantograph_start
+        if not pantograph_start(self.spec) < design.length:
+            raise Invalid(("pantograph", "trailing"), f"{list(pan.trailing)} puts the leading pantograph past "
+                          f"the line's end {design.length:g} m",
+                          f"distances below {design.length - 0.1 * design.droppers[0]:g} m (or a start)")
+        try:
+            pantograph_run_time(self.spec)
+        except ModelError as e:
+            raise Invalid(("pantograph", "start"), str(e), "a start that keeps every pantograph on the line or "
+                          "off it for the whole run") from None
 
     def run(self):
         self.names()

@@ -571,23 +571,32 @@ class CatenarySpec(Table):
 class PantographSpec(Table):
     """A lumped-mass pantograph (point masses pantograph.1 … bottom to head) running
     under the catenary's contact wire at speed_kmh, in penalty contact with it
-    (pantograph.contact). The run ends one span past the evaluated spans (or at
-    solver.t_end if earlier); `ancf-jax run` writes statistics.json,
-    contact_force.csv and the figures."""
+    (pantograph.contact), pushed up by F0 + c_aero v², and trailing pantographs of
+    the same design (pantograph2, ...). The run ends when the last pantograph is one
+    span past the evaluated spans (or at solver.t_end if earlier); `ancf-jax run`
+    writes statistics.json, contact_force.csv and the figures, and with
+    `--set pantograph.speed_kmh=[V1, V2, ...]` runs the speeds in one vmapped batch
+    (docs/pantograph-catenary.md)."""
 
     masses: Numbers = key(_PAN.masses, unit="kg", doc="m_i > 0 from the bottom (frame) to the head")
     stiffness: Numbers = key(_PAN.stiffness, unit="N/m", doc="k_i >= 0 of the stage below each mass")
     damping: Numbers = key(_PAN.damping, unit="N·s/m", doc="c_i >= 0 of the stage below each mass")
     uplift: float = key(_PAN.uplift, unit="N", gt=0.0, allow_inf_nan=False,
-                        doc="static uplift force on the bottom mass (the masses carry no weight)")
+                        doc="static uplift force F0 on the bottom mass (the masses carry no weight)")
+    aero_coefficient: float = key(_PAN.aero_coefficient, unit="N/(m/s)²", allow_inf_nan=False,
+                                  doc="aerodynamic uplift c_aero: the uplift is F0 + c_aero v² at speed v "
+                                      "(EN 50367; negative: a downforce)")
     contact_stiffness: float = key(_PAN.contact_stiffness, unit="N/m", gt=0.0, allow_inf_nan=False,
                                    doc="penalty stiffness of the head-wire contact")
     contact_damping: float = key(_PAN.contact_damping, unit="N·s/m", ge=0.0, allow_inf_nan=False,
                                  doc="damping of the head-wire contact")
     speed_kmh: float = key(250.0, unit="km/h", gt=0.0, le=600.0, allow_inf_nan=False, doc="train speed")
     start: Optional[float] = key(None, unit="m", gt=0.0, allow_inf_nan=False,
-                                 doc="x of the pantograph at t = 0 (default a tenth of the first dropper's "
-                                     "distance)")
+                                 doc="x of the (leading) pantograph at t = 0 (default: the last pantograph at "
+                                     "a tenth of the first dropper's distance)")
+    trailing: Optional[Numbers] = key(None, unit="m", doc="trailing pantographs of the same design (pantograph2, "
+                                                         "...): their distances behind the leading one, "
+                                                         "increasing (e.g. [200.0]: double traction)")
     spans: Optional[list[int]] = key(None, doc="[first, last] evaluated span, 1-based (default the two "
                                                "central spans of four or more, else the last)")
     cutoff: float = key(CUTOFF, unit="Hz", gt=0.0, allow_inf_nan=False, doc="low-pass cut-off of the statistics")
@@ -596,7 +605,8 @@ class PantographSpec(Table):
         """The builder's :class:`~ancf_jax.models.catenary.PantographDesign`."""
         return PantographDesign(masses=tuple(self.masses), stiffness=tuple(self.stiffness),
                                 damping=tuple(self.damping), uplift=self.uplift,
-                                contact_stiffness=self.contact_stiffness, contact_damping=self.contact_damping)
+                                aero_coefficient=self.aero_coefficient, contact_stiffness=self.contact_stiffness,
+                                contact_damping=self.contact_damping)
 
 
 # ----------------------------------------------------------------------------- state, solvers

@@ -99,6 +99,10 @@ def test_defaults_are_written_once():
     for function in (catenary.run_pantograph_catenary, catenary.analyse_pantograph_run, catenary.contact_statistics):
         assert default(function, "cutoff") == cutoff
     assert default(catenary.run_pantograph_catenary, "solver") == DEFAULT_SOLVER
+    assert schema.PantographSpec.model_fields["trailing"].default is None  # none: the functions' ()
+    assert default(catenary.pantograph_catenary, "trailing") == default(catenary.run_pantograph_catenary, "trailing") \
+        == default(catenary.analyse_pantograph_run, "trailing") == default(catenary.pantograph_run_time, "trailing") \
+        == ()
     assert default(Model.build, "tolerance") == default(assemble_state, "tolerance")
     from ancf_jax.element.laws import StrainRateDamped
     assert schema.StrainRateDampedLawSpec.model_fields["rest"].default == default(StrainRateDamped.__init__, "rest")
