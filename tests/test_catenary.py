@@ -72,6 +72,21 @@ def static_dropper_errors(element_length):
     return np.max(np.abs(tension / names.design.dropper_force - 1)), dy
 
 
+def test_the_shipped_design_meshes_its_600_m_wires():
+    """The shipped design (10 spans of 60 m, 0.5 m elements) builds its model: the
+    stress-free meshes of both wires, 1,200 elements each, whose lengths add up to the
+    600 m line shortened by the wire's pre-strain H/EA (to 1e-3: the sag between the
+    supports lengthens the messenger by 3.5e-4, the contact wire by 1e-6) (the Hermite length of an element 300 m from the origin had not
+    converged, so the shipped scenario failed to build; no solve here)."""
+    design = CatenaryDesign()
+    model, names = pantograph_catenary(design, speed=250 / 3.6)
+    for wire, spec in ((names.contact, design.contact), (names.messenger, design.messenger)):
+        lengths = np.asarray(model._beams[wire].mesh.element_lengths)
+        assert lengths.size == 1200
+        strain = spec.tension / spec.axial_stiffness
+        assert lengths.sum() == pytest.approx(600.0 / (1 + strain), rel=1e-3), strain
+
+
 def test_static_dropper_forces_match_the_hand_equilibrium():
     """The static solve of the assembled model (bending, extensible wires, tension-only
     droppers, support springs) from the design state moves it by the mesh error only:
