@@ -73,3 +73,24 @@ def _free_programs_near_the_limit():
     from ancf_jax import _memory
     _memory.relieve(0.6)
     yield
+
+
+# The longest modules start first. With ``--dist loadscope`` each module runs whole in
+# one xdist worker, handed out in collection order; a long module collected late (the
+# alphabet puts test_sweep near the end) leaves the other worker idle at the end of the
+# run. Longest first is the classic greedy schedule for two workers. The list holds
+# the modules over about a minute of worker time (ANCF_JAX_TIMING_LOG, summed per
+# module); the rest keep their order.
+_LONG_MODULES = ("tests/test_notebooks.py", "tests/test_identification.py", "tests/test_catenary.py",
+                 "tests/test_moving_loads.py", "tests/test_sweep.py", "tests/test_identification_real.py",
+                 "tests/test_cable_machinery.py", "tests/test_local_sensitivity.py", "tests/test_fatigue.py")
+
+
+def pytest_collection_modifyitems(config, items):
+    rank = {path: k for k, path in enumerate(_LONG_MODULES)}
+
+    def key(item):
+        path = item.nodeid.split("::")[0]
+        return rank.get(path, len(rank))
+
+    items.sort(key=key)  # stable: the order within a module and among the rest is kept
