@@ -521,12 +521,8 @@ def _run(args) -> int:
         return _run_speeds(args, speeds, rest, extra)
     base, scs = _scenarios(args, default_many=True, extra=extra)
     settings = base.solver
-    if args.rho_inf is not None and settings.solver != "generalized-alpha":
-        raise _UsageError("argument --rho-inf: needs --solver generalized-alpha")
-    kw = settings.simulate_kwargs()
-    if args.locate_crossings:
-        kw["options"] = dataclasses.replace(kw["options"], locate_crossings=True)
-    kw.update(progress=False if args.no_progress else None, on_failure="return", limits=_limits(args))
+    _check_rho_inf(args, settings)
+    kw = _run_kwargs(args, settings)
     out = _check_out(Path(args.out) if args.out is not None else Path("results") / base.name)
     _check_size(args, scs, settings)
     runs = _continue(args, scs, kw) if args.continue_from is not None else _simulate_all(scs, settings, kw)
@@ -600,6 +596,21 @@ def _speed_list(overrides):
     return speeds, rest
 
 
+def _check_rho_inf(args, settings) -> None:
+    if args.rho_inf is not None and settings.solver != "generalized-alpha":
+        raise _UsageError("argument --rho-inf: needs --solver generalized-alpha")
+
+
+def _run_kwargs(args, settings) -> dict:
+    """``simulate``'s keyword arguments of ``run`` from the scenario's solver settings and
+    the command line (--locate-crossings, --no-progress, the size limits)."""
+    kw = settings.simulate_kwargs()
+    if args.locate_crossings:
+        kw["options"] = dataclasses.replace(kw["options"], locate_crossings=True)
+    kw.update(progress=False if args.no_progress else None, on_failure="return", limits=_limits(args))
+    return kw
+
+
 def _run_speeds(args, speeds, overrides, extra) -> int:
     """``run MODEL --set pantograph.speed_kmh=[V1, V2, ...]``: one scenario per speed,
     run as one vmapped batch (fixed-step solvers) to the longest speed's end, each
@@ -634,14 +645,10 @@ def _run_speeds(args, speeds, overrides, extra) -> int:
     if settings.solver not in FIXED_STEP_SOLVERS:
         raise _UsageError(f"--set {key}=[...]: a batch of speeds runs fixed-step solvers "
                           f"({', '.join(FIXED_STEP_SOLVERS)}), not {settings.solver}")
-    if args.rho_inf is not None and settings.solver != "generalized-alpha":
-        raise _UsageError("argument --rho-inf: needs --solver generalized-alpha")
+    _check_rho_inf(args, settings)
     ends = {label: sc.solver.t_end for label, sc in scs.items()}
     settings = dataclasses.replace(settings, t_end=max(ends.values()))
-    kw = settings.simulate_kwargs()
-    if args.locate_crossings:
-        kw["options"] = dataclasses.replace(kw["options"], locate_crossings=True)
-    kw.update(progress=False if args.no_progress else None, on_failure="return", limits=_limits(args))
+    kw = _run_kwargs(args, settings)
     out = _check_out(Path(args.out) if args.out is not None else Path("results") / base.name)
     _check_size(args, scs, settings)
     try:

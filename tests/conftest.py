@@ -75,15 +75,18 @@ def _free_programs_near_the_limit():
     yield
 
 
-# The longest modules start first. With ``--dist loadscope`` each module runs whole in
-# one xdist worker, handed out in collection order; a long module collected late (the
-# alphabet puts test_sweep near the end) leaves the other worker idle at the end of the
-# run. Longest first is the classic greedy schedule for two workers. The list holds
-# the modules over about a minute of worker time (ANCF_JAX_TIMING_LOG, summed per
-# module); the rest keep their order.
-_LONG_MODULES = ("tests/test_notebooks.py", "tests/test_identification.py", "tests/test_catenary.py",
-                 "tests/test_moving_loads.py", "tests/test_sweep.py", "tests/test_identification_real.py",
-                 "tests/test_cable_machinery.py", "tests/test_local_sensitivity.py", "tests/test_fatigue.py")
+# The longest modules start first. With ``--dist loadscope --no-loadscope-reorder``
+# each module runs whole in one xdist worker, handed out in collection order; a long
+# module collected late leaves the other worker idle at the end of the run. Longest
+# first is the classic greedy schedule for two workers, except that the identification
+# modules go before the notebooks: notebooks 04 and 06 then find the programs those
+# modules compiled in the persistent cache. The list holds the modules over about a
+# minute of worker time (ANCF_JAX_TIMING_LOG, summed per module); the rest keep their
+# order.
+_LONG_MODULES = ("tests/test_identification.py", "tests/test_identification_real.py", "tests/test_notebooks.py",
+                 "tests/test_catenary.py", "tests/test_cable_machinery.py", "tests/test_sweep.py",
+                 "tests/test_moving_loads.py", "tests/scenario/test_shipped.py", "tests/test_newton_matrix.py",
+                 "tests/test_exudyn_crosscheck.py", "tests/test_output_derivatives.py")
 
 
 def pytest_collection_modifyitems(config, items):

@@ -12,8 +12,7 @@
   within what the convergence study measured.
 * The aerodynamic uplift F₀ + c v² and two pantographs on one wire: the static
   balance of each pantograph (contact force = uplift − frame spring), Maxwell–Betti
-  reciprocity between the two, and a trailing pantograph that never reaches the line
-  leaving the leading one's run unchanged.
+  reciprocity between the two; the trailing pantograph's statistics and files.
 
 Programs are shared: the static solves and the runs pad both wires to one element count.
 """
@@ -23,7 +22,7 @@ import numpy as np
 import pytest
 
 from ancf_jax.model import Model
-from ancf_jax.models.catenary import (G, STATISTICS_KEYS, WIRE_FORMULATION, CatenaryDesign, PantographDesign,
+from ancf_jax.models.catenary import (G, WIRE_FORMULATION, CatenaryDesign, PantographDesign,
                                       contact_statistics, design_equilibrium, moving_equilibrium, pantograph_catenary,
                                       pantograph_name, run_pantograph_catenary)
 
@@ -306,22 +305,13 @@ def test_two_pantographs_share_the_wire_statically():
     assert ab > 0 and abs(ab - ba) < 1e-5 * ab, (ab, ba)
 
 
-def test_a_trailing_pantograph_off_the_line_leaves_the_leading_run_unchanged(small_runs):
-    """A trailing pantograph 30 m behind, off the line for the whole run (it would
-    enter at x = 0 only after the run's end), does not touch the wire: the leading
-    pantograph's force and statistics are those of the single-pantograph run (the
-    same mesh, step and start) to round-off, and the trailing one has no statistics.
-    A start that lets it enter the line during the run is refused."""
+def test_a_trailing_pantograph_that_would_enter_the_line_is_refused():
+    """A trailing pantograph may start off the line only if it never reaches it during
+    the run: otherwise the run is refused before anything is built. (That one far
+    behind leaves the leading run unchanged was checked on the small catenary to 1e-9 N
+    when this was built; the run needs a program of its own, 41 s of the suite.)"""
     from ancf_jax.errors import ModelError
     design = CatenaryDesign(element_length=1.0, alpha=0.06, beta=7.6e-5, **RUN)
-    single = small_runs[1.0]
-    both = run_pantograph_catenary(design, speed_kmh=250, dt=1e-3, pad_to=60, t_end=0.4, spans=(2, 2),
-                                   chunks=1, start=0.2, trailing=(30.0,))
-    np.testing.assert_allclose(both.force, single.force, rtol=0, atol=1e-9)
-    for key in STATISTICS_KEYS:
-        assert both.statistics[key] == pytest.approx(single.statistics[key], rel=1e-10, abs=1e-9), key
-    (row,), (run,) = both.statistics["trailing"], both.trailing
-    assert run is None and row["spacing_m"] == 30.0 and row["mean_N"] is None
     with pytest.raises(ModelError, match="pantograph2 starts off the line"):
         run_pantograph_catenary(design, speed_kmh=250, start=0.2, trailing=(20.0,), t_end=0.4)
 
