@@ -156,8 +156,9 @@ class AbstractFactorReuse(eqx.Module):
 
     @abc.abstractmethod
     def initial(self, factor_shape) -> FactorMemory | None:
-        """The memory of a run's first step (None: nothing carried); ``factor_shape``
-        the shapes and dtypes of the factors (:func:`jax.eval_shape`)."""
+        """The memory of a run's first step (None: nothing carried); ``factor_shape()``
+        gives the shapes and dtypes of the factors (:func:`jax.eval_shape`; called only
+        by a policy that carries them, as it traces the Newton matrix)."""
 
     @abc.abstractmethod
     def start(self, memory: FactorMemory | None, h):
@@ -201,7 +202,7 @@ class AcrossSteps(AbstractFactorReuse):
         check_count("max_age", self.max_age, 1)
 
     def initial(self, factor_shape):
-        zeros = jax.tree.map(lambda a: jnp.zeros(a.shape, a.dtype), factor_shape)
+        zeros = jax.tree.map(lambda a: jnp.zeros(a.shape, a.dtype), factor_shape())
         none = jnp.zeros((), jnp.int32)
         return FactorMemory(zeros, jnp.array(jnp.nan), none, none)
 
@@ -280,7 +281,7 @@ class GeneralizedAlpha(AbstractIntegrator):
             matrix = dae.iteration_matrix(system, q, v, lam, t, 1.0, 1.0, jac)
             return self.linear_solver.init(matrix, None)
 
-        return self.factor_reuse.initial(jax.eval_shape(factors, q, v, lam, t))
+        return self.factor_reuse.initial(lambda: jax.eval_shape(factors, q, v, lam, t))
 
     def init(self, system, state, context) -> Carry:
         t = jnp.asarray(state.t, float)
