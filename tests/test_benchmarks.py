@@ -80,7 +80,7 @@ def test_report_renders_from_json_only(tmp_path):
     lines = {ln.split("|")[1].strip(): ln for ln in text.splitlines() if ln.startswith("| ") and "≤" in ln}
     m1 = next(v for k, v in lines.items() if k.startswith("M1 (6 el.)"))
     m2 = next(v for k, v in lines.items() if k.startswith("M2 (24 el.)"))
-    assert "| met |" in m1 and "missed by 1.6×" in m2
+    assert "| met |" in m1 and "missed by 4×" in m2  # limit 0.2
     assert "missed by 1.5×" in next(v for k, v in lines.items() if k.startswith("compile time of the three"))
     assert "missed: p = 1.3 > 1" in next(v for k, v in lines.items() if k.startswith("per-step cost"))
     # a fit that stops short of 192 elements (quick mode) is not a verdict on the target

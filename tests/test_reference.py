@@ -2,7 +2,8 @@
 
 ``tests/reference/*.npz`` were made by ``python -m tests.reference.make_reference`` with
 the code before the solver-core rewrite (commit stored in each file): M1, M2 and the
-flexible pendulum (H1) over 0–0.5 s at their shipped default settings. Any change of
+flexible pendulum (H1) over 0–0.5 s at their shipped default settings of then
+(``make_reference.FORMER_DEFAULTS`` restores those that have changed since). Any change of
 the step, the Newton matrix or the linear solvers must reproduce them to 1e-9 m (the
 Newton tolerance is 1e-10 on the correction; a different but convergent iteration
 matrix changes the iterates at that level only).

@@ -51,14 +51,21 @@ factors 0.185 times per step at 5.0 instead of 3.3 Newton iterations, 7.6 instea
 refreshes come from slow contraction); M1 (a stiff wire swinging through large
 rotations) at h = 1.25 ms, 0–2 s (interleaved in one process, best of 9) needs more
 than one factorization per step either way (1.35 at 5.2 iterations instead of 1 at 3.9)
-and runs 1.07–1.2× slower with reuse, so reuse is opt-in. What remains of the catenary's step is mostly the iterations and the velocity
-projection below (2.0 of its 7.2 ms against ``velocity_projection=False`` in the same
-process, best of 4: the mass-metric factors at the new Φ_q).
+and runs 1.07–1.2× slower with reuse, so reuse is opt-in. What remained of the catenary's step then was mostly the iterations and the velocity
+projection below (2.0 of its 7.2 ms, best of 4), now off by default.
 
-Positions satisfy Φ = 0 to the Newton tolerance at every step (index 3). With
-``velocity_projection=True`` (default) the velocities are also projected onto
-Φ_q v + Φ_t = 0 after the step in the mass metric (the beam-mass factors are constant,
-so this costs one small Schur complement).
+Positions satisfy Φ = 0 to the Newton tolerance at every step (index 3); the
+velocities satisfy Φ_q v + Φ_t = 0 to the order of the method. With
+``velocity_projection=True`` they are also projected onto it after every step in the
+mass metric (one more saddle-point factorization per step, at the new Φ_q). Off by
+default: it buys no accuracy in any model measured
+(``python -m benchmarks.velocity_projection``, ``benchmarks/results/velocity_projection.md``:
+M1, M2 and H1 at three steps and the reduced pantograph–catenary at two, against a
+converged reference of the same mesh, the compared output changes by at most 0.5 % of
+the run's error (M2 at h = 2 ms: 6.6e-7 m of 1.2e-4 m; elsewhere under 1e-7 of it))
+and costs 10–24 % of the run. Without it the velocity constraints are violated by
+O(h) to O(h²) (M1 at h = 1.25 ms: 3.4e-4 m/s; M2 at 1 ms: 6.9e-4 m/s), without
+accumulating; Exudyn has no such projection either.
 
 Constraint level (``constraints``): :class:`PositionLevel` (default, index 3) solves
 Φ(q_{n+1}, t_{n+1}) = 0 with the equations of motion; :class:`VelocityLevel` (index 2,
@@ -224,7 +231,8 @@ class GeneralizedAlpha(AbstractIntegrator):
             0: maximal). Default 0.9, as Exudyn's default.
         root_finder: the Newton solver of every step (tolerance on the position
             correction, refresh policy, linear solver).
-        velocity_projection: project v onto the velocity constraints after each step.
+        velocity_projection: project v onto the velocity constraints after each step
+            (default off: module docstring).
         refinement: iterative-refinement steps of the tangent solves (derivatives).
         implicit_diff: differentiate the converged step equations (implicit function
             theorem) instead of the Newton iterations.
@@ -236,7 +244,7 @@ class GeneralizedAlpha(AbstractIntegrator):
 
     rho_inf: float = eqx.field(static=True, default=0.9)
     root_finder: ModifiedNewton = ModifiedNewton()
-    velocity_projection: bool = eqx.field(static=True, default=True)
+    velocity_projection: bool = eqx.field(static=True, default=False)
     refinement: int = eqx.field(static=True, default=4)
     implicit_diff: bool = eqx.field(static=True, default=True)
     constraints: AbstractConstraintLevel = PositionLevel()
