@@ -1,6 +1,6 @@
 # python benchmarks/m1_ratio.py  (from the repository root, PYTHONPATH=.)
-"""M1 single run ratio against Exudyn at the equal-accuracy settings of
-benchmarks/results/single_run.json (both h = 1.25 ms, 0-2 s), interleaved, one process."""
+"""M1 single run ratio against Exudyn at the equal-accuracy settings that
+benchmarks/results/single_run.json chose for each code (0-2 s), interleaved, one process."""
 import json, statistics, time
 from benchmarks import cases as C
 from benchmarks import exudyn_models as em
@@ -9,8 +9,11 @@ d = json.load(open("benchmarks/results/single_run.json"))
 row = [x for x in d["rows"] if x["model"] == "M1"][0]
 e = row["exudyn"]["chosen"]
 system, state = C.m1(6)
-opts = dict(refresh_first=True, contraction=0.1, linear_solver="dense")
-kw = dict(t_end=2.0, dt=1.25e-3, output_dt=C.GRID, solver=make_solver("generalized-alpha", **opts), progress=False)
+chosen = row["ancf_jax"]["chosen"]
+opts = dict(chosen["options"])
+if opts.pop("dense", False):  # written before the solver-core rewrite
+    opts["linear_solver"] = "dense"
+kw = dict(t_end=2.0, dt=chosen["dt"], output_dt=C.GRID, solver=make_solver("generalized-alpha", **opts), progress=False)
 r = simulate(system, state, **kw)
 a_t, e_t = [], []
 for _ in range(5):
@@ -20,7 +23,7 @@ for _ in range(5):
     er = em.run(model, t_end=2.0, dt=e["dt"], output_dt=C.GRID, **e["options"])
     e_t.append(time.perf_counter() - t0)
 a, x = statistics.median(a_t), statistics.median(e_t)
-out = dict(ancf_run_s=a, exudyn_run_s=x, ratio=a / x, ancf_compile_s=r.compile_time_s,
+out = dict(ancf_options=opts, ancf_dt=kw["dt"], exudyn_dt=e["dt"], ancf_run_s=a, exudyn_run_s=x, ratio=a / x, ancf_compile_s=r.compile_time_s,
            exudyn_status=er.status, ancf_status=r.status)
 print(json.dumps(out))
 # kept for benchmarks/RESULTS.md (report.sec_single: the latest re-measurement)
