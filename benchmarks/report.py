@@ -36,6 +36,9 @@ TARGETS = (
 
 #: written on a GPU machine by ``python -m benchmarks.batch_gpu`` (not by benchmarks.run)
 EXTRA = ("batch_gpu", "batch_gpu_dense")
+#: written by ``python -m benchmarks.step_profile`` (not by benchmarks.run); rendered
+#: after the single runs
+PROFILE = "step_profile"
 
 
 
@@ -47,7 +50,7 @@ def _dense(options) -> bool:
 
 def load(results: Path) -> dict:
     out = {}
-    for name in SECTIONS + EXTRA:
+    for name in SECTIONS + EXTRA + (PROFILE,):
         p = results / f"{name}.json"
         if p.exists():
             out[name] = json.loads(p.read_text())
@@ -375,6 +378,35 @@ def sec_single(d):
     return "".join(out)
 
 
+def sec_step_profile(d):
+    """Where the time of one M1 step goes (benchmarks/step_profile.py)."""
+    us = 1e6
+    p = d["parts_s"]
+    it, nf = d["iterations_per_step"], d["factorizations_per_step"]
+    rows = [["residual (M q̈ − Q + Φ_qᵀλ, Φ)", f"{p['residual'] * us:.3g}", f"× {it:.2f} it.",
+             f"{it * p['residual'] * us:.3g}"],
+            ["Newton solve with the factors", f"{p['solve'] * us:.3g}", f"× {it:.2f} it.",
+             f"{it * p['solve'] * us:.3g}"],
+            ["Newton matrix (Φ_q, element tangents, assembly)", f"{p['newton_matrix'] * us:.3g}",
+             f"× {nf:.2f} fact.", f"{nf * p['newton_matrix'] * us:.3g}"],
+            ["its factorization", f"{p['factorization'] * us:.3g}", f"× {nf:.2f} fact.",
+             f"{nf * p['factorization'] * us:.3g}"],
+            ["energy-balance powers", f"{p['powers'] * us:.3g}", "× 1", f"{p['powers'] * us:.3g}"],
+            ["**sum of the parts**", "", "", f"**{d['model_s'] * us:.3g}**"],
+            ["control flow of the step (Newton loop, bookkeeping): bare step − sum", "", "",
+             f"{d['control_flow_s'] * us:.3g}"],
+            ["**bare step** (`lax.scan` of the step)", "", "", f"**{d['bare_step_s'] * us:.3g}**"],
+            ["run loop (status checks, outputs, chunks): simulate − bare step", "", "",
+             f"{d['run_loop_s'] * us:.3g}"],
+            ["**simulate**, per step", "", "", f"**{d['simulate_per_step_s'] * us:.3g}**"]]
+    return (f"### Profile of the M1 step\n\nM1, {d['elements']} elements ({d['coordinates']} coordinates, "
+            f"{d['multipliers']} multipliers), h = {d['h']:g} s, {d['options']} (single_run's choice), "
+            f"0–{d['t_end']:g} s: {it:.2f} Newton iterations and {nf:.2f} factorizations per step. Each part "
+            "jitted alone in a loop of calls on changing input, best of 5 (µs):\n\n"
+            + table(["part", "per call [µs]", "calls per step", "per step [µs]"], rows)
+            + f"\n_Command: `python -m benchmarks.step_profile`; {d['stamp']['date']}._\n")
+
+
 def sec_batch(d, plots):
     out = ["## Batch throughput (M1 variants; M2 s₀ variants)\n\n", _error_block(d)]
     if d.get("rows"):
@@ -600,6 +632,8 @@ def render(results: Path | None = None, out: Path | None = None) -> Path:
     for name in SECTIONS:
         if name in data:
             parts.append(renderers[name](data[name]) + "\n")
+        if name == "single_run" and PROFILE in data:
+            parts.append(sec_step_profile(data[PROFILE]) + "\n")
         if name == "batch":
             parts += [sec_batch_gpu(data[g], data.get("batch")) + "\n" for g in EXTRA if g in data]
     out.write_text("".join(parts))

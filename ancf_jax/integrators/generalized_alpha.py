@@ -62,8 +62,11 @@ default: it buys no accuracy in any model measured
 (``python -m benchmarks.velocity_projection``, ``benchmarks/results/velocity_projection.md``:
 M1, M2 and H1 at three steps and the reduced pantograph–catenary at two, against a
 converged reference of the same mesh, the compared output changes by at most 0.5 % of
-the run's error (M2 at h = 2 ms: 6.6e-7 m of 1.2e-4 m; elsewhere under 1e-7 of it))
-and costs 10–24 % of the run. Without it the velocity constraints are violated by
+the run's error (M2 at h = 2 ms: 6.6e-7 m of 1.2e-4 m; M2 at 1 and 0.5 ms: 3e-4 and 2e-4 of it; M1,
+H1 and the catenary: under 1e-7 of it), the
+multipliers (joint reactions) by at most 5 % of theirs (M2 at 2 ms: 1.2 % of the
+largest reaction, whose error there is 27 %); it costs 13–29 % of the run in 11 of
+12 timed rows (one within the timing noise). Without it the velocity constraints are violated by
 O(h) to O(h²) (M1 at h = 1.25 ms: 3.4e-4 m/s; M2 at 1 ms: 6.9e-4 m/s), without
 accumulating; Exudyn has no such projection either.
 
