@@ -110,6 +110,15 @@ def targets(data: dict) -> list:
                           f"{ac['iterations'] / max(1, ac['steps']):.2g} Newton it./step, {ms(a_step)}/step; "
                           f"Exudyn h = {ec['dt']:g} s, {ec['steps']} steps, "
                           f"{ec['iterations'] / max(1, ec['steps']):.2g} it./step, {ms(e_step)}/step")
+        prof = data.get(PROFILE)
+        if model == "M1" and prof and value is not None:
+            us, pp = 1e6, prof["parts_s"]
+            detail += (f"; profile of the step (µs, Profile of the M1 step below): residuals "
+                       f"{prof['iterations_per_step'] * pp['residual'] * us:.0f}, Newton matrix and its "
+                       f"factorization {prof['factorizations_per_step'] * (pp['newton_matrix'] + pp['factorization']) * us:.0f}, "
+                       f"solves {prof['iterations_per_step'] * pp['solve'] * us:.0f}, powers {pp['powers'] * us:.0f}, "
+                       f"control flow of the loops {(prof['control_flow_s'] + prof['run_loop_s']) * us:.0f}, of "
+                       f"{prof['simulate_per_step_s'] * us:.0f}")
         rows.append((key, value, detail))
     b = data.get("batch", {})
     value, detail = None, "not run"

@@ -68,6 +68,11 @@ def synthetic(tmp_path):
                                      for dt in (1e-3, 5e-4)]))
     put("compile_time", dict(section="compile_time", m1=dict(compile_s=4.0, first_call_s=4.5),
                              m2_batch=dict(compile_s=12.0, first_call_s=13.0), m2_counts=[12, 18, 24]))
+    put("step_profile", dict(model="M1", elements=6, h=1e-3, options={}, steps=2000, t_end=2.0, coordinates=31,
+                             multipliers=7, iterations_per_step=3.0, factorizations_per_step=1.0,
+                             simulate_per_step_s=90e-6, bare_step_s=80e-6, model_s=60e-6, control_flow_s=20e-6,
+                             run_loop_s=10e-6, parts_s=dict(residual=8e-6, solve=2e-6, newton_matrix=14e-6,
+                                                            factorization=10e-6, powers=6e-6)))
     put("agreement", dict(section="agreement", exudyn=False, exudyn_missing="Exudyn disabled", rows=[],
                           error="RuntimeError: boom"))
 
@@ -77,6 +82,8 @@ def test_report_renders_from_json_only(tmp_path):
     out = report.render(tmp_path, tmp_path / "RESULTS.md")
     text = out.read_text()
     assert "Quick mode" in text and "test cpu" in text
+    # the step profile: parts × calls per step, their sum and what the loops add
+    assert "### Profile of the M1 step" in text and "| **sum of the parts** |  |  | **60** |" in text
     lines = {ln.split("|")[1].strip(): ln for ln in text.splitlines() if ln.startswith("| ") and "≤" in ln}
     m1 = next(v for k, v in lines.items() if k.startswith("M1 (6 el.)"))
     m2 = next(v for k, v in lines.items() if k.startswith("M2 (24 el.)"))
