@@ -82,7 +82,7 @@ def _program_parts(system, state, solver_options, *, batched) -> dict:
 
 def _m1_parts() -> dict:
     from . import cases as C
-    return _program_parts(*C.m1(6), None, batched=False)
+    return _program_parts(*C.m1(6), {}, batched=False)
 
 
 def _m2_parts() -> dict:
