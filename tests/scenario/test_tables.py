@@ -58,7 +58,7 @@ def outside(tmp_path):
     inside = tmp_path / "scenario"
     inside.mkdir()
     secret = tmp_path / "secret.csv"
-    secret.write_text("0,42\n1,42\n")
+    secret.write_text("0,271828.5\n1,271828.5\n")  # a value no path or message holds
     return inside, secret
 
 
@@ -103,4 +103,4 @@ def test_scenario_reads_its_data_file_and_refuses_others(outside, no_build):
             with pytest.raises(ScenarioError) as err:
                 load_scenario(str(write(inside, bad)))
         assert err.value.key == "loads.push.time_function"
-        assert "42" not in str(err.value)
+        assert "271828" not in str(err.value)  # ("42" failed in a tmp dir pytest-42)
