@@ -64,18 +64,9 @@ def chosen_settings(quick):
                 for code in ("ancf_jax", "exudyn"):
                     c = row.get(code, {}).get("chosen")
                     if c:
-                        options = ancf_options(c["options"]) if code == "ancf_jax" else c["options"]
+                        options = C.ancf_options(c["options"]) if code == "ancf_jax" else c["options"]
                         out[code] = dict(dt=c["dt"], options=options, source="single_run.json")
     return out
-
-
-def ancf_options(options: dict) -> dict:
-    """ancf_jax's solver options as simulate takes them now: results written before
-    the solver-core rewrite (issue 16) say ``dense = true`` for ``linear_solver = "dense"``."""
-    options = dict(options)
-    if options.pop("dense", False):
-        options["linear_solver"] = "dense"
-    return options
 
 
 def with_parameters(system, alpha, youngs):

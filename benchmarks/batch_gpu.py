@@ -24,7 +24,7 @@ import json
 import numpy as np
 
 from . import cases as C
-from .batch import FULL, QUICK, ancf_options, m1_batch_row, s0_batch
+from .batch import FULL, QUICK, m1_batch_row, s0_batch
 from .common import RESULTS, write
 
 
@@ -36,7 +36,7 @@ def settings() -> dict:
         for row in data.get("rows", []):
             c = row.get("ancf_jax", {}).get("chosen") if row["model"] == "M1" else None
             if c:
-                return dict(dt=c["dt"], options=ancf_options(c["options"]),
+                return dict(dt=c["dt"], options=C.ancf_options(c["options"]),
                             source="single_run.json" + (" (quick)" if data.get("quick") else ""))
     return dict(dt=1e-3, options={}, source="default")
 

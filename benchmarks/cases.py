@@ -172,6 +172,24 @@ class Run:
     iterations: int
 
 
+def chosen_settings(name: str, code: str = "ancf_jax") -> tuple[float, dict]:
+    """(h [s], flat solver options) that results/single_run.json chose for ``code`` on
+    model ``name`` (ancf_jax's through :func:`ancf_options`)."""
+    import json
+    d = json.loads((RESULTS / "single_run.json").read_text())
+    chosen = next(r for r in d["rows"] if r["model"] == name)[code]["chosen"]
+    return chosen["dt"], ancf_options(chosen["options"]) if code == "ancf_jax" else dict(chosen["options"])
+
+
+def ancf_options(options: dict) -> dict:
+    """ancf_jax's solver options as simulate takes them now: results written before
+    the solver-core rewrite (issue 16) say ``dense = true`` for ``linear_solver = "dense"``."""
+    options = dict(options)
+    if options.pop("dense", False):
+        options["linear_solver"] = "dense"
+    return options
+
+
 def ancf_settings(name: str) -> dict:
     """ancf_jax's own solver options per model (M2: the shipped run settings, since the
     default Newton settings fail on M2, EXUDYN.md finding 1)."""

@@ -5,25 +5,20 @@ import json, statistics, time
 from benchmarks import cases as C
 from benchmarks import exudyn_models as em
 from ancf_jax.simulation import make_solver, simulate
-d = json.load(open("benchmarks/results/single_run.json"))
-row = [x for x in d["rows"] if x["model"] == "M1"][0]
-e = row["exudyn"]["chosen"]
 system, state = C.m1(6)
-chosen = row["ancf_jax"]["chosen"]
-opts = dict(chosen["options"])
-if opts.pop("dense", False):  # written before the solver-core rewrite
-    opts["linear_solver"] = "dense"
-kw = dict(t_end=2.0, dt=chosen["dt"], output_dt=C.GRID, solver=make_solver("generalized-alpha", **opts), progress=False)
+dt, opts = C.chosen_settings("M1")
+e_dt, e_opts = C.chosen_settings("M1", "exudyn")
+kw = dict(t_end=2.0, dt=dt, output_dt=C.GRID, solver=make_solver("generalized-alpha", **opts), progress=False)
 r = simulate(system, state, **kw)
 a_t, e_t = [], []
 for _ in range(5):
     a_t.append(simulate(system, state, **kw).wall_time_s)
     model = em.build_exudyn(system, state, name="M1")
     t0 = time.perf_counter()
-    er = em.run(model, t_end=2.0, dt=e["dt"], output_dt=C.GRID, **e["options"])
+    er = em.run(model, t_end=2.0, dt=e_dt, output_dt=C.GRID, **e_opts)
     e_t.append(time.perf_counter() - t0)
 a, x = statistics.median(a_t), statistics.median(e_t)
-out = dict(ancf_options=opts, ancf_dt=kw["dt"], exudyn_dt=e["dt"], ancf_run_s=a, exudyn_run_s=x, ratio=a / x, ancf_compile_s=r.compile_time_s,
+out = dict(ancf_options=opts, ancf_dt=kw["dt"], exudyn_dt=e_dt, ancf_run_s=a, exudyn_run_s=x, ratio=a / x, ancf_compile_s=r.compile_time_s,
            exudyn_status=er.status, ancf_status=r.status)
 print(json.dumps(out))
 # kept for benchmarks/RESULTS.md (report.sec_single: the latest re-measurement)

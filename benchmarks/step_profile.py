@@ -35,22 +35,11 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from benchmarks import cases as C  # noqa: E402
-from benchmarks.common import RESULTS, write  # noqa: E402
+from benchmarks.common import write  # noqa: E402
 
 REPS = 5
 N = 2000
 T_END = 2.0
-
-
-def chosen_settings() -> tuple[float, dict]:
-    """(h, flat solver options) that single_run.json chose for ancf_jax on M1."""
-    d = json.loads((RESULTS / "single_run.json").read_text())
-    row = next(r for r in d["rows"] if r["model"] == "M1")
-    chosen = row["ancf_jax"]["chosen"]
-    opts = dict(chosen["options"])
-    if opts.pop("dense", False):  # written before the solver-core rewrite
-        opts["linear_solver"] = "dense"
-    return chosen["dt"], opts
 
 
 def per_call(f, x) -> float:
@@ -81,7 +70,7 @@ def main() -> dict:
     from ancf_jax.integrators.generalized_alpha import AcrossSteps
     from ancf_jax.simulation import make_solver, simulate
 
-    h, opts = chosen_settings()
+    h, opts = C.chosen_settings("M1")
     system, state = C.m1(6)
     solver = make_solver("generalized-alpha", **opts).forward_only()
     ls = solver.linear_solver
