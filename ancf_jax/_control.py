@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import functools
+
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 
@@ -17,3 +20,45 @@ def run_if(pred, fn, operand):
         return jnp.zeros_like(pred), fn(x)
 
     return jax.lax.while_loop(lambda c: c[0], body, (pred, operand))[1]
+
+
+def traced_once(method):
+    """A method of an ``eqx.Module`` whose body is traced once per argument shapes while
+    a program is being traced: inside a trace it runs as a nested, inlined ``jax.jit``
+    (arrays dynamic, everything else static), so its second and later calls with the
+    same shapes (the constraint under ``vjp``, ``jacrev`` and ``jvp`` in one step, the
+    beam mass in the residual and the Newton matrix) replay the cached jaxpr instead of
+    tracing the Python code again. The program is the same (the jaxpr is inlined where
+    it is called). Called eagerly (no tracer among the arguments), it is the plain
+    method: nothing is compiled for one evaluation."""
+
+    @functools.partial(jax.jit, static_argnums=0, inline=True)
+    def call(static, dynamic):
+        self, args, kwargs = eqx.combine(dynamic, static.tree)
+        return method(self, *args, **kwargs)
+
+    @functools.wraps(method)
+    def wrapper(self, *args, **kwargs):
+        tree = (self, args, kwargs)
+        if not any(isinstance(a, jax.core.Tracer) for a in jax.tree.leaves(tree)):
+            return method(self, *args, **kwargs)
+        dynamic, static = eqx.partition(tree, eqx.is_array)
+        return call(_Static(static), dynamic)
+
+    return wrapper
+
+
+class _Static:
+    """A pytree of static leaves, hashed and compared by its structure and leaves."""
+
+    __slots__ = ("tree", "_key")
+
+    def __init__(self, tree):
+        leaves, treedef = jax.tree.flatten(tree)
+        self.tree, self._key = tree, (treedef, tuple(leaves))
+
+    def __hash__(self):
+        return hash(self._key)
+
+    def __eq__(self, other):
+        return isinstance(other, _Static) and self._key == other._key

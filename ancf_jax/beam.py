@@ -18,6 +18,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ._control import traced_once
 from .element import mass as element_mass
 from .element.shape_functions import position as _position, shape_matrix, slope as _slope
 from .element import laws as _laws
@@ -137,6 +138,7 @@ class Beam(eqx.Module):
             e, e_ref, self.mesh.element_lengths)
         return jnp.where(self.mesh.active, u, 0.0)
 
+    @traced_once
     def strain_energy(self, nodes):
         """Total strain energy U of the beam [J] (Eq. 8 summed over elements)."""
         return jnp.sum(self.element_energies(nodes))
@@ -145,6 +147,7 @@ class Beam(eqx.Module):
         """Generalized elastic force −∂U/∂e, shape (n_max + 1, 4) [N, N·m] (Eq. 9)."""
         return -jax.grad(self.strain_energy)(nodes)
 
+    @traced_once
     def element_stiffness(self, nodes):
         """Tangent stiffness ∂²U/∂e² of every element, shape (n_max, 8, 8), zero when inactive."""
         e = self.mesh.element_coordinates(nodes)
@@ -157,6 +160,7 @@ class Beam(eqx.Module):
             e, e_ref, self.mesh.element_lengths)
         return jnp.where(self.mesh.active[:, None, None], h, 0.0)
 
+    @traced_once
     def element_tangent(self, nodes, velocities, damping_coef):
         """Linearization of the elastic and stiffness-proportional damping forces of
         every element for a Newton matrix, shape (n_max, 8, 8), zero when inactive:
@@ -254,6 +258,7 @@ class Beam(eqx.Module):
             m = m.at[k].add(mm)
         return m
 
+    @traced_once
     def mass(self) -> BlockTridiagonal:
         """Assembled consistent mass matrix with a unit dummy mass on inactive nodes."""
         m = BlockTridiagonal.from_element_matrices(self.element_mass())

@@ -27,6 +27,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ._control import traced_once
 from .beam import Beam
 from .bodies import RigidBodies
 from .linalg import AbstractChainLayout, BlockTridiagonal, SequentialChain
@@ -269,6 +270,7 @@ class System(eqx.Module):
         """−∂V/∂q of the total potential (elastic Eq. 9, gravity, springs), shape (n,)."""
         return -jax.grad(self.potential_energy)(q, t, load_factor)
 
+    @traced_once
     def _beam_forces(self, q, v, with_elastic: bool):
         """Elastic forces −∂U/∂q and Rayleigh forces −(αM + βK)v of all beams, in one
         linearization of the elastic force per beam: ``jax.jvp`` of −∂U/∂e along the
@@ -332,12 +334,14 @@ class System(eqx.Module):
         return sum(c.size for c in self.constraints[:k])
 
     # ------------------------------------------------------------------ constraints
+    @traced_once
     def constraint(self, q, t=0.0):
         """Φ(q, t), shape (m,)."""
         if not self.constraints:
             return jnp.zeros((0,), q.dtype)
         return jnp.concatenate([c.residual(self, q, t) for c in self.constraints])
 
+    @traced_once
     def constraint_jacobian(self, q, t=0.0):
         """Φ_q(q, t) = ∂Φ/∂q by reverse-mode autodiff (m VJPs), shape (m, n)."""
         if not self.constraints:
