@@ -271,7 +271,7 @@ class System(eqx.Module):
         return -jax.grad(self.potential_energy)(q, t, load_factor)
 
     @traced_once
-    def _beam_forces(self, q, v, with_elastic: bool):
+    def _beam_forces(self, q, v):
         """Elastic forces −∂U/∂q and Rayleigh forces −(αM + βK)v of all beams, in one
         linearization of the elastic force per beam: ``jax.jvp`` of −∂U/∂e along the
         nodal velocities returns the force (primal) and −K v (tangent) together; plus the
@@ -288,8 +288,7 @@ class System(eqx.Module):
             damping = damping.at[sl].add(-b.alpha * m_v + b.beta * jnp.reshape(minus_kv, (-1,)))
             if b.has_rate_law:  # rate parts of material laws (a dissipation)
                 damping = damping.at[sl].add(jnp.reshape(b.dissipative_force(nodes, vel), (-1,)))
-            if with_elastic:
-                elastic = elastic.at[sl].add(jnp.reshape(f, (-1,)))
+            elastic = elastic.at[sl].add(jnp.reshape(f, (-1,)))
         return elastic, damping
 
     def damping_force(self, q, v):
@@ -298,7 +297,9 @@ class System(eqx.Module):
         β K v is one Jacobian-vector product of the elastic force at the current q
         (K is the current tangent stiffness); no matrix is assembled.
         """
-        _, out = self._beam_forces(q, v, with_elastic=False)
+        # the elastic force is dropped (XLA removes it): one traced body serves this and
+        # generalized_force (traced_once), the forces come from one JVP either way
+        _, out = self._beam_forces(q, v)
         for f in self.forces:
             out = out + f.dissipative_force(self, q, v)
         return out
@@ -316,7 +317,7 @@ class System(eqx.Module):
         Elastic and Rayleigh forces come from one JVP of the elastic force per beam
         (see :meth:`_beam_forces`); gravity is the constant consistent load.
         """
-        elastic, damping = self._beam_forces(q, v, with_elastic=True)
+        elastic, damping = self._beam_forces(q, v)
         out = elastic + damping + load_factor * self.gravity_load()
         for f in self.forces:
             out = out + f.generalized_force(self, q, v, t, load_factor)
