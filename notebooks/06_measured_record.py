@@ -84,16 +84,12 @@ system, state = reference.build()
 try:
     import exudyn as exu
 
-    from ancf_jax.interop.exudyn import simulation_settings, to_exudyn
-    x = to_exudyn(system, state)
-    n_steps = int(round(T_END / H_FINE))
+    from ancf_jax.interop.exudyn import to_exudyn
     # full Newton to 1e-6 of each step's initial residual (Exudyn's 1e-8 stalls at the
     # round-off of the stiff 24-element wire; at 12 elements both give the same record
     # to 1e-15 m)
-    exu.SolveDynamic(x.mbs, simulation_settings(t_end=T_END, h=H_FINE, n_steps=n_steps, output_dt=H_FINE,
-                                                modified_newton=False, relative_tolerance=1e-6,
-                                                max_iterations=50))
-    t_ref, q_ref = x.history()
+    t_ref, q_ref = to_exudyn(system, state).solve_dynamic(t_end=T_END, h=H_FINE, modified_newton=False,
+                                                          relative_tolerance=1e-6, max_iterations=50)
     source = f"Exudyn {exu.__version__}"
 except ImportError:  # the optional cross-check package is not installed
     from ancf_jax.simulation import simulate

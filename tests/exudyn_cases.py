@@ -693,7 +693,7 @@ def index2_matches_exudyn():
     body point), 0.5 s at h = 1 ms, full Newton: every coordinate agrees to 1e-9
     (measured 1.7e-11). Negative control: Exudyn at index 3 differs from ancf_jax at
     index 2 by the O(h²) difference of the two methods (> 1e-6)."""
-    from ancf_jax.interop.exudyn import simulation_settings, to_exudyn
+    from ancf_jax.interop.exudyn import to_exudyn
     from ancf_jax.integrate import RunOptions
     from ancf_jax.simulation import make_solver, simulate
     from tests.dynamics import pendulum_model
@@ -705,12 +705,17 @@ def index2_matches_exudyn():
     assert res.status == "ok"
     diffs = {}
     for index in (2, 3):
-        x = to_exudyn(system, state)
-        exu.SolveDynamic(x.mbs, simulation_settings(t_end=0.5, h=1e-3, n_steps=500, output_dt=0.01, rho_inf=1.0,
-                                                    relative_tolerance=1e-8, absolute_tolerance=1e-12,
-                                                    modified_newton=False, max_iterations=50, index=index))
-        _, q = x.history()
+        _, q = to_exudyn(system, state).solve_dynamic(t_end=0.5, h=1e-3, output_dt=0.01, rho_inf=1.0,
+                                                      relative_tolerance=1e-8, absolute_tolerance=1e-12,
+                                                      modified_newton=False, max_iterations=50, index=index)
         diffs[index] = np.max(np.abs(q - np.asarray(res.q)))
     print(f"index 2: {diffs[2]:.3g}; against Exudyn at index 3: {diffs[3]:.3g}")
     assert np.ptp(np.asarray(res.q)[:, 2]) > 1.0  # it swung
     assert diffs[2] < 1e-9 and diffs[3] > 1e-6
+    from ancf_jax.errors import ModelError
+    try:  # solve_dynamic refuses a span that is not a whole number of steps, before solving
+        to_exudyn(system, state).solve_dynamic(t_end=0.5, h=3e-3)
+    except ModelError as e:
+        assert "t_end = 0.5 s must be a positive whole number of steps" in str(e)
+    else:
+        raise AssertionError("t_end = 0.5 s with h = 3 ms was accepted")

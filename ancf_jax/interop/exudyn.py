@@ -493,6 +493,26 @@ class ExudynSystem:
             out[k, :x.shape[0]] = x
         return out
 
+    def solve_dynamic(self, *, t_end: float, h: float, output_dt: float | None = None, **settings):
+        """Integrate with Exudyn's fixed-step generalized-α from the translated initial
+        state to ``t_end`` [s] at step ``h`` [s] (:func:`simulation_settings`: the
+        other keywords; sensors every ``output_dt`` [s], default h) and return
+        :meth:`history`, (t (N,), q (N, n_coordinates)).
+
+        Raises:
+            ModelError: ``t_end`` is not a whole number of steps, or Exudyn's solve failed.
+        """
+        exu, _ = _exudyn()
+        n_steps = int(round(t_end / h))
+        if n_steps < 1 or abs(n_steps * h - t_end) > 1e-9 * max(1.0, t_end):
+            raise ModelError(f"t_end = {t_end!r} s must be a positive whole number of steps h = {h!r} s")
+        ok = exu.SolveDynamic(self.mbs, simulation_settings(t_end=t_end, h=h, n_steps=n_steps,
+                                                            output_dt=h if output_dt is None else output_dt,
+                                                            **settings))
+        if ok is False:
+            raise ModelError(f"Exudyn's SolveDynamic failed (t_end = {t_end:g} s, h = {h:g} s, {settings})")
+        return self.history()
+
     def history(self):
         """(t (N,), q (N, n_coordinates)) of the ancf_jax coordinates at Exudyn's sensor
         times after a solve (built with ``sensors=True``)."""
