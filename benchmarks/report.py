@@ -30,7 +30,7 @@ TARGETS = (
     ("gradient", "value + gradient w.r.t. (α, β) / one forward run", 3.0),
     ("compile_m1", "compile time of M1 [s]", 3.0),
     ("compile_m2", "compile time of the three-mesh M2 batch [s]", 8.0),
-    ("scaling", "per-step cost exponent p (cost ∝ n^p), 24 to 192 elements", 1.0),
+    ("scaling", "per-step cost exponent p (cost ∝ n^p), 24 to 384 elements", 1.0),
 )
 
 
@@ -160,9 +160,21 @@ def targets(data: dict) -> list:
               + (f"; Exudyn p = {f(s['exponent'].get('exudyn'))}" if s.get("exponent", {}).get("exudyn") is not None else "")
               if s else "not run")
     p_fit = s.get("exponent", {}).get("ancf_jax") if s else None
-    if s and max(counts, default=0) < 192:
-        # the target is about 24 to 192 elements; a fit over fewer counts says little
-        detail = f"not run up to 192 elements (quick); {detail}: p = {f(p_fit)}"
+    marginal = (s.get("marginal") or {}).get("ancf_jax") if s else None
+    if marginal:
+        detail += (f"; marginal cost {f(marginal['per_element_s'] * 1e6)} µs per element and step "
+                   f"(cost = a + b n over n ≥ {s.get('fit_from', 24)}: a = {f(marginal['fixed_s'] * 1e6)} µs), "
+                   f"local exponent {f(marginal['last_exponent'])} from {marginal['last_counts'][0]} to "
+                   f"{marginal['last_counts'][1]} elements")
+    prof = s.get("profiles") if s else None
+    if prof and len(prof) >= 2:
+        a, b = prof[0], prof[-1]
+        detail += (f"; from {a['elements']} to {b['elements']} elements the step's timed parts grow "
+                   f"×{b['model_s'] / a['model_s']:.2f} and the rest of the step "
+                   f"×{b['control_flow_s'] / a['control_flow_s']:.2f} (profile in the section below)")
+    if s and max(counts, default=0) < 384:
+        # the target is about 24 to 384 elements; a fit over fewer counts says little
+        detail = f"not run up to 384 elements; {detail}: p = {f(p_fit)}"
         p_fit = None
     rows.append(("scaling", p_fit, detail))
     out = []
@@ -553,6 +565,30 @@ def sec_gradient(d):
     return "".join(out)
 
 
+def _scaling_profiles(profiles) -> str:
+    """The steps of the largest counts taken apart (benchmarks/step_profile.profile),
+    per step [ms], and how each part grows from the first profiled count to the last."""
+    def parts(p):
+        q, it, nf = p["parts_s"], p["iterations_per_step"], p["factorizations_per_step"]
+        return {"residuals": it * q["residual"], "solves": it * q["solve"],
+                "Newton matrix + factorization": nf * (q["newton_matrix"] + q["factorization"]),
+                "powers": q["powers"], "sum of the parts": p["model_s"],
+                "the rest of the step (bare step − parts)": p["control_flow_s"],
+                "bare step": p["bare_step_s"], "run loop (simulate − bare step)": p["run_loop_s"],
+                "simulate": p["simulate_per_step_s"]}
+    cols = [parts(p) for p in profiles]
+    head = ["per step [ms]"] + [f"{p['elements']} el. ({p['iterations_per_step']:.2f} it., "
+                                f"{p['factorizations_per_step']:.2f} fact.)" for p in profiles]
+    rows = [[k] + [f"{c[k] * 1e3:.3g}" for c in cols] for k in cols[0]]
+    if len(profiles) >= 2:
+        head.append(f"× from {profiles[0]['elements']} to {profiles[-1]['elements']}")
+        for r, k in zip(rows, cols[0]):
+            r.append(f"{cols[-1][k] / cols[0][k]:.2f}" if cols[0][k] > 0 else "–")
+    return ("\nThe steps of the two largest meshes taken apart (`benchmarks.step_profile.profile`: each part "
+            "jitted alone in a loop of calls, best of 5, at the run's state at mid-span; iterations and "
+            "factorizations per step as the run took them):\n\n" + table(head, rows))
+
+
 def sec_scaling(d, plots):
     out = ["## Per-step cost against element count\n\n", _error_block(d)]
     if d.get("rows"):
@@ -565,13 +601,24 @@ def sec_scaling(d, plots):
                    f(r["ancf_compile_s"]) if r["ancf_compile_s"] > 0 else "cached (earlier section)"]
             row += ([ms(r["exudyn"]["per_step_s"]) + st("exudyn"), f(r["exudyn"]["iterations_per_step"], 2),
                      r.get("exudyn_newton", "modified")]
-                    if "exudyn" in r else [_missing(d), "", ""])
+                    if "exudyn" in r else
+                    [f"not run (above {d['exudyn_max']} elements)" if d.get("exudyn_max") and d.get("exudyn")
+                     and r["elements"] > d["exudyn_max"] else _missing(d), "", ""])
             rows.append(row)
         out.append(table(["elements", "ancf_jax per step", "ancf_jax it./step", "ancf_jax compile [s]",
                           "Exudyn per step", "Exudyn it./step", "Exudyn Newton"], rows))
         ex = d.get("exponent", {})
         out.append(f"\nFitted exponent (n ≥ {d['fit_from']}): ancf_jax {f(ex.get('ancf_jax'))}, "
                    f"Exudyn {f(ex.get('exudyn')) if 'exudyn' in ex else _missing(d)}.\n")
+        mg = (d.get("marginal") or {}).get("ancf_jax")
+        if mg:
+            out.append(f"\nMarginal cost of ancf_jax (cost = a + b n, least squares over n ≥ {d['fit_from']}): "
+                       f"b = {f(mg['per_element_s'] * 1e6)} µs per element and step, fixed part a = "
+                       f"{f(mg['fixed_s'] * 1e6)} µs per step; local exponent between {mg['last_counts'][0]} "
+                       f"and {mg['last_counts'][1]} elements {f(mg['last_exponent'])} (where the fixed part "
+                       "matters least).\n")
+        if d.get("profiles"):
+            out.append(_scaling_profiles(d["profiles"]))
         if "scaling" in plots:
             out.append(f"\n![scaling]({plots['scaling']})\n")
     out.append(_source(d))

@@ -62,7 +62,10 @@ def per_call(f, x) -> float:
     return best / N
 
 
-def main() -> dict:
+def profile(system, state, h, opts, t_end=T_END, *, t_parts=1.0) -> dict:
+    """The profile of a generalized-α step (module docstring) of ``system`` at step h
+    [s] with the solver options ``opts`` over 0–``t_end`` [s], its parts timed at the
+    state of the run nearest ``t_parts`` [s]. Returns the figures (times in seconds)."""
     import jax
     import jax.numpy as jnp
 
@@ -70,14 +73,12 @@ def main() -> dict:
     from ancf_jax.integrators.generalized_alpha import AcrossSteps
     from ancf_jax.simulation import make_solver, simulate
 
-    h, opts = C.chosen_settings("M1")
-    system, state = C.m1(6)
     solver = make_solver("generalized-alpha", **opts).forward_only()
     ls = solver.linear_solver
-    steps = int(round(T_END / h))
+    steps = int(round(t_end / h))
 
     # the run and the bare step
-    kw = dict(t_end=T_END, dt=h, output_dt=C.GRID, solver=solver, progress=False)
+    kw = dict(t_end=t_end, dt=h, output_dt=C.GRID, solver=solver, progress=False)
     res = simulate(system, state, **kw)
     sim = min(simulate(system, state, **kw).wall_time_s for _ in range(REPS)) / steps
     ctx = solver.prepare(system)
@@ -99,8 +100,8 @@ def main() -> dict:
     bare_step = best / steps
     iterations = float(np.sum(res.iterations)) / steps
 
-    # the parts, at a state of the run (t = 1 s)
-    k = int(np.argmin(np.abs(np.asarray(res.t) - 1.0)))
+    # the parts, at a state of the run (t = t_parts)
+    k = int(np.argmin(np.abs(np.asarray(res.t) - t_parts)))
     q, v, lam, t = (jnp.asarray(res.q[k]), jnp.asarray(res.v[k]), jnp.asarray(res.lam[k]),
                     float(res.t[k]))
     am, af, gamma, beta = solver.coefficients
@@ -135,12 +136,17 @@ def main() -> dict:
     factorizations = float(counted.checkpoint.carry.memory.factorizations) / steps
     model = (iterations * (parts["residual"] + parts["solve"])
              + factorizations * (parts["newton_matrix"] + parts["factorization"]) + parts["powers"])
-    out = dict(model="M1", elements=6, h=h, options=opts, steps=steps, t_end=T_END,
-               coordinates=system.n_coordinates, multipliers=system.n_constraints,
-               iterations_per_step=iterations, factorizations_per_step=factorizations,
-               simulate_per_step_s=sim, bare_step_s=bare_step, parts_s=parts, model_s=model,
-               control_flow_s=bare_step - model, run_loop_s=sim - bare_step,
-               )
+    return dict(h=h, options=opts, steps=steps, t_end=t_end,
+                coordinates=system.n_coordinates, multipliers=system.n_constraints,
+                iterations_per_step=iterations, factorizations_per_step=factorizations,
+                simulate_per_step_s=sim, bare_step_s=bare_step, parts_s=parts, model_s=model,
+                control_flow_s=bare_step - model, run_loop_s=sim - bare_step)
+
+
+def main() -> dict:
+    h, opts = C.chosen_settings("M1")
+    system, state = C.m1(6)
+    out = dict(model="M1", elements=6, **profile(system, state, h, opts))
     print(json.dumps(out, indent=1, default=float))
     write("step_profile", out)
     return out

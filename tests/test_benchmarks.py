@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from benchmarks import common, report
@@ -55,12 +56,21 @@ def synthetic(tmp_path):
                                            for r, x, e in ((1, 2.0, 1e-4), (2, 2.5, 1e-7), (4, 3.5, 1e-11),
                                                            (8, 4.5, 0.0))],
                          gradient_tolerance=1e-6, chosen_refinement=2, ratio_at_equal_accuracy=2.5))
-    put("scaling", dict(section="scaling", exudyn=True, t_end=0.1, dt=1e-3, fit_from=24,
+    put("scaling", dict(section="scaling", exudyn=True, t_end=0.1, dt=1e-3, fit_from=24, exudyn_max=192,
                         exponent=dict(ancf_jax=1.3, exudyn=1.0),
+                        marginal=dict(ancf_jax=dict(per_element_s=1e-4, fixed_s=2e-5, last_exponent=0.98,
+                                                    last_counts=[192, 384])),
+                        profiles=[dict(elements=n, iterations_per_step=3.5, factorizations_per_step=1.0,
+                                       parts_s=dict(residual=1e-6 * n, solve=5e-7 * n, newton_matrix=1e-6 * n,
+                                                    factorization=2e-6 * n, powers=5e-7 * n),
+                                       model_s=9e-6 * n, control_flow_s=rest, bare_step_s=9e-6 * n + rest,
+                                       run_loop_s=1e-5, simulate_per_step_s=9e-6 * n + rest + 1e-5)
+                                  for n, rest in ((192, 5e-4), (384, 2e-3))],
                         rows=[dict(elements=n, steps=100, ancf_compile_s=1.0,
                                    ancf_jax=dict(per_step_s=1e-4 * n, iterations_per_step=3.0),
-                                   exudyn=dict(per_step_s=2e-4 * n, iterations_per_step=3.0))
-                              for n in (24, 48, 96, 192)]))
+                                   **({} if n > 192 else dict(exudyn=dict(per_step_s=2e-4 * n,
+                                                                           iterations_per_step=3.0))))
+                              for n in (24, 48, 96, 192, 384)]))
     put("work_precision", dict(section="work_precision", model="M1", t_end=0.05, error_measure="tip",
                                reference=dict(dt=1e-5, error_estimate=1e-9), solvers=["generalized-alpha"],
                                rows=[dict(solver="generalized-alpha", dt=dt, status="ok", error=dt * 0.1,
@@ -89,14 +99,19 @@ def test_report_renders_from_json_only(tmp_path):
     m2 = next(v for k, v in lines.items() if k.startswith("M2 (24 el.)"))
     assert "| met |" in m1 and "missed by 4×" in m2  # limit 0.2
     assert "missed by 1.5×" in next(v for k, v in lines.items() if k.startswith("compile time of the three"))
-    assert "missed: p = 1.3 > 1" in next(v for k, v in lines.items() if k.startswith("per-step cost"))
-    # a fit that stops short of 192 elements (quick mode) is not a verdict on the target
+    scaling_line = next(v for k, v in lines.items() if k.startswith("per-step cost"))
+    assert "missed: p = 1.3 > 1" in scaling_line and "marginal cost 100 µs per element and step" in scaling_line
+    assert "local exponent 0.98 from 192 to 384 elements" in scaling_line
+    assert "the step's timed parts grow ×2.00 and the rest of the step ×4.00" in scaling_line
+    assert "| the rest of the step (bare step − parts) | 0.5 | 2 | 4.00 |" in text
+    assert "| 384 | 38.4 ms |" in text and "not run (above 192 elements)" in text
+    # a fit that stops short of 384 elements (quick mode) is not a verdict on the target
     data = json.loads((tmp_path / "scaling.json").read_text())
     data["rows"] = data["rows"][:2]
     (tmp_path / "scaling.json").write_text(json.dumps(data))
     text = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
     line = next(ln for ln in text.splitlines() if ln.startswith("| per-step cost"))
-    assert "not measured" in line and "not run up to 192" in line and "p = 1.3" in line
+    assert "not measured" in line and "not run up to 384" in line and "p = 1.3" in line
     grad_line = next(v for k, v in lines.items() if k.startswith("value + gradient"))
     assert "| met |" in grad_line and "refinement 2" in grad_line and "at the default refinement 3.5" in grad_line
     assert "| 2 | 2 | 0.25 | 2.5 | 1e-07 | ✓ |" in text and "| 8 | 2 | 0.45 | 4.5 | reference |  |" in text
@@ -121,6 +136,20 @@ def test_run_without_exudyn_end_to_end(tmp_path, monkeypatch):
     assert data["exudyn"] is False and "disabled" in data["exudyn_missing"] and data["quick"] is True
     text = (tmp_path / "RESULTS.md").read_text()
     assert "Exudyn rows: Exudyn disabled" in text
+
+
+def test_marginal_cost_separates_a_fixed_overhead():
+    """cost = a + b n: the fit returns b and a; a large fixed part makes the log-log
+    exponent small while the local exponent of the two largest counts nears 1."""
+    from benchmarks.scaling import fit_exponent, fit_marginal
+    counts = [6, 24, 48, 96, 192, 384]
+    costs = [1e-3 + 2e-6 * n for n in counts]
+    m = fit_marginal(counts, costs)
+    assert m["per_element_s"] == pytest.approx(2e-6, rel=1e-9) and m["fixed_s"] == pytest.approx(1e-3, rel=1e-9)
+    assert m["last_counts"] == [192, 384]
+    assert m["last_exponent"] == pytest.approx(np.log(1.768 / 1.384) / np.log(2.0), rel=1e-9)
+    assert fit_exponent(counts, costs) < m["last_exponent"] < 1.0
+    assert fit_marginal(counts[:2], costs[:2]) is None  # one count at n >= 24: no fit
 
 
 @pytest.mark.slow
