@@ -7,7 +7,8 @@ scenario's step or ``--dt``), with Gaussian noise of ``--noise`` over ``--seeds`
 ``ObjectANCFCable2D`` (engineering axial strain, material curvature, its integration
 rule 2: 3-point Lobatto axial, 2-point Gauss bending) translated by ``to_exudyn`` and
 integrated by Exudyn's generalized-α (ρ∞ = 0.9, full Newton) at the fine step, as in
-notebook 06.
+notebook 06. ``--fit-formulation exudyn`` fits with Exudyn's element instead of the
+scenario's.
 Two ways of fitting α (β fixed at its true 0) are compared:
 
 1. ``coarse``: the fitted model as given, no discretization check (what ``ancf-jax fit
@@ -57,6 +58,14 @@ def stats(results, truth=TRUTH):
                 converged=int(sum(r.converged for r in results)), estimates=est.tolist(), stderr=se.tolist())
 
 
+#: ``--set`` items of the fitted model's element (``--fit-formulation``): Exudyn's cable
+#: with integration rule 2 is ancf_jax's cable_formulation(2)
+FORMULATIONS = {"default": (), "exudyn": ('beams.beam.formulation.axial_strain="engineering"',
+                                          'beams.beam.formulation.curvature="material"',
+                                          'beams.beam.formulation.axial_quadrature=["lobatto", 3]',
+                                          'beams.beam.formulation.bending_quadrature=["gauss", 2]')}
+
+
 def exudyn_record(elements: int, dt: float, t_end: float):
     """M1's tip Y-displacement [m] at times [s] by Exudyn (module docstring)."""
     import exudyn as exu
@@ -88,6 +97,9 @@ def main():
                     "as ancf-jax fit)")
     ap.add_argument("--reference", choices=("ancf_jax", "exudyn"), default="ancf_jax",
                     help="the code that makes the foreign record (default ancf_jax)")
+    ap.add_argument("--fit-formulation", choices=("default", "exudyn"), default="default",
+                    help="the fitted model's element: the scenario's (default) or Exudyn's cable "
+                    "(engineering strain, material curvature, its integration rule 2)")
     ap.add_argument("--out", type=Path, default=OUT)
     args = ap.parse_args()
     setup = vars(args).copy()
@@ -109,7 +121,8 @@ def main():
     sets = [Measurements.from_arrays(t, clean + args.noise * np.random.default_rng(s).standard_normal(len(t)),
                                      source=f"seed {s}") for s in range(args.seeds)]
     res["foreign_data_s"] = time.perf_counter() - t0
-    coarse = Problem.from_scenario("m1", ("alpha", "beta"), elements=args.elements, t_end=args.t_end, dt=args.dt)
+    coarse = Problem.from_scenario("m1", ("alpha", "beta"), elements=args.elements, t_end=args.t_end, dt=args.dt,
+                                   overrides=FORMULATIONS[args.fit_formulation])
     init = {"alpha": 0.01, "beta": 0.0}
     t1 = time.perf_counter()
     checked = fit(coarse, sets[0], init, free=("alpha",), noise=args.noise, discretization=True,
