@@ -227,3 +227,21 @@ def test_ancf_side_of_the_benchmarks_does_not_import_exudyn():
     assert s["exudyn"] and cases.exudyn_available() in (True, False)
     assert cases.formulation().axial_strain == "engineering"
     assert was or "exudyn" not in sys.modules
+
+
+def test_single_run_pick_ranks_settings_by_the_median_of_new_runs(monkeypatch):
+    """The search's one run per setting can rank them wrongly; pick times each passing
+    setting again, interleaved, and takes the smallest median."""
+    from types import SimpleNamespace
+
+    from benchmarks import cases as C
+    from benchmarks import single_run
+    # setting a ran 0.10 s in the search but takes 0.20 s; setting b the other way round
+    times = {1e-3: iter([0.20, 0.21, 0.19]), 2e-3: iter([0.15, 0.50, 0.14])}
+    monkeypatch.setattr(C, "run_ancf", lambda name, system, state, t_end, dt, options:
+                        SimpleNamespace(run_s=next(times[dt])))
+    passing = [dict(dt=1e-3, options={}, run_s=0.10), dict(dt=2e-3, options={"x": 1}, run_s=0.30)]
+    best = single_run.pick("M1", "ancf_jax", None, None, 1.0, passing)
+    assert best is passing[1] and best["retimed_run_s"] == 0.15 and passing[0]["retimed_run_s"] == 0.20
+    assert single_run.pick("M1", "ancf_jax", None, None, 1.0, passing[:1]) is passing[0]  # nothing to rank
+    assert single_run.pick("M1", "ancf_jax", None, None, 1.0, []) is None
