@@ -58,12 +58,16 @@ def stats(results, truth=TRUTH):
                 converged=int(sum(r.converged for r in results)), estimates=est.tolist(), stderr=se.tolist())
 
 
-#: ``--set`` items of the fitted model's element (``--fit-formulation``): Exudyn's cable
-#: with integration rule 2 is ancf_jax's cable_formulation(2)
-FORMULATIONS = {"default": (), "exudyn": ('beams.beam.formulation.axial_strain="engineering"',
-                                          'beams.beam.formulation.curvature="material"',
-                                          'beams.beam.formulation.axial_quadrature=["lobatto", 3]',
-                                          'beams.beam.formulation.bending_quadrature=["gauss", 2]')}
+def formulation_overrides(kind: str) -> tuple[str, ...]:
+    """``--set`` items of the fitted model's element (``--fit-formulation``): none for
+    the scenario's, every field of ``cable_formulation(2)`` (Exudyn's cable with its
+    integration rule 2, the record's element) for ``"exudyn"``."""
+    if kind == "default":
+        return ()
+    from ancf_jax.interop.exudyn import cable_formulation
+    f = cable_formulation(2)
+    return tuple(f"beams.beam.formulation.{k}={json.dumps(getattr(f, k))}"
+                 for k in ("axial_strain", "curvature", "axial_quadrature", "bending_quadrature", "metric"))
 
 
 def exudyn_record(elements: int, dt: float, t_end: float):
@@ -122,7 +126,7 @@ def main():
                                      source=f"seed {s}") for s in range(args.seeds)]
     res["foreign_data_s"] = time.perf_counter() - t0
     coarse = Problem.from_scenario("m1", ("alpha", "beta"), elements=args.elements, t_end=args.t_end, dt=args.dt,
-                                   overrides=FORMULATIONS[args.fit_formulation])
+                                   overrides=formulation_overrides(args.fit_formulation))
     init = {"alpha": 0.01, "beta": 0.0}
     t1 = time.perf_counter()
     checked = fit(coarse, sets[0], init, free=("alpha",), noise=args.noise, discretization=True,

@@ -245,3 +245,18 @@ def test_single_run_pick_ranks_settings_by_the_median_of_new_runs(monkeypatch):
     assert best is passing[1] and best["retimed_run_s"] == 0.15 and passing[0]["retimed_run_s"] == 0.20
     assert single_run.pick("M1", "ancf_jax", None, None, 1.0, passing[:1]) is passing[0]  # nothing to rank
     assert single_run.pick("M1", "ancf_jax", None, None, 1.0, []) is None
+
+
+def test_coverage_fit_formulation_is_the_records_element():
+    """--fit-formulation exudyn builds the fitted M1 with exactly the element of Exudyn's
+    record (cable_formulation(2)); the default leaves the scenario's."""
+    from ancf_jax.identification import Problem
+    from ancf_jax.interop.exudyn import cable_formulation
+    from benchmarks.identification_coverage import formulation_overrides
+
+    def element(kind):
+        return Problem.from_scenario("m1", ("alpha", "beta"), elements=2, t_end=0.01,
+                                     overrides=formulation_overrides(kind)).system.beams[0].formulation
+
+    assert element("exudyn") == cable_formulation(2)
+    assert element("default") != cable_formulation(2) and formulation_overrides("default") == ()
