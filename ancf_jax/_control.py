@@ -8,6 +8,8 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
+from . import _products
+
 
 def run_if(pred, fn, operand):
     """``fn(operand)`` where ``pred`` holds, else ``operand`` — as a while loop of at
@@ -43,7 +45,8 @@ def traced_once(method):
         if not any(isinstance(a, jax.core.Tracer) for a in jax.tree.leaves(tree)):
             return method(self, *args, **kwargs)
         dynamic, static = eqx.partition(tree, eqx.is_array)
-        return call(_Static(static), dynamic)
+        # how small products are written depends on the enclosing batch (_products)
+        return call(_Static(static, _products.as_sums()), dynamic)
 
     return wrapper
 
@@ -53,9 +56,9 @@ class _Static:
 
     __slots__ = ("tree", "_key")
 
-    def __init__(self, tree):
+    def __init__(self, tree, *extra):
         leaves, treedef = jax.tree.flatten(tree)
-        self.tree, self._key = tree, (treedef, tuple(leaves))
+        self.tree, self._key = tree, (treedef, tuple(leaves), extra)
 
     def __hash__(self):
         return hash(self._key)

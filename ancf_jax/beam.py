@@ -18,6 +18,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from . import _products
 from ._control import traced_once
 from .element import mass as element_mass
 from .element.shape_functions import position as _position, shape_matrix, slope as _slope
@@ -133,9 +134,10 @@ class Beam(eqx.Module):
         e_ref = self.mesh.reference_elements
         ea = self.section.axial_stiffness
         ei = self.section.bending_stiffness
-        u = jax.vmap(lambda ee, er, l: strain_energy(ee, er, l, ea, ei, self.formulation,
-                                                     self.axial_law, self.bending_law))(
-            e, e_ref, self.mesh.element_lengths)
+        with _products.batch(self.mesh.n_max):
+            u = jax.vmap(lambda ee, er, l: strain_energy(ee, er, l, ea, ei, self.formulation,
+                                                         self.axial_law, self.bending_law))(
+                e, e_ref, self.mesh.element_lengths)
         return jnp.where(self.mesh.active, u, 0.0)
 
     @traced_once
@@ -154,10 +156,11 @@ class Beam(eqx.Module):
         e_ref = self.mesh.reference_elements
         ea = self.section.axial_stiffness
         ei = self.section.bending_stiffness
-        h = jax.vmap(jax.hessian(
-            lambda ee, er, l: strain_energy(ee, er, l, ea, ei, self.formulation,
-                                            self.axial_law, self.bending_law)))(
-            e, e_ref, self.mesh.element_lengths)
+        with _products.batch(self.mesh.n_max):
+            h = jax.vmap(jax.hessian(
+                lambda ee, er, l: strain_energy(ee, er, l, ea, ei, self.formulation,
+                                                self.axial_law, self.bending_law)))(
+                e, e_ref, self.mesh.element_lengths)
         return jnp.where(self.mesh.active[:, None, None], h, 0.0)
 
     @traced_once
@@ -203,7 +206,8 @@ class Beam(eqx.Module):
                 return g + self.beta * kw
             return jax.jacfwd(f)(ee)
 
-        h = jax.vmap(one)(e, ed, e_ref, self.mesh.element_lengths)
+        with _products.batch(self.mesh.n_max):
+            h = jax.vmap(one)(e, ed, e_ref, self.mesh.element_lengths)
         return jnp.where(self.mesh.active[:, None, None], h, 0.0)
 
     # ------------------------------------------------------------------ rate laws
@@ -223,9 +227,10 @@ class Beam(eqx.Module):
         law). See :func:`ancf_jax.element.strain_energy.dissipative_force`."""
         if not self.has_rate_law:
             return jnp.zeros_like(nodes)
-        f = jax.vmap(self._element_dissipative)(
-            self.mesh.element_coordinates(nodes), self.mesh.element_coordinates(velocities),
-            self.mesh.reference_elements, self.mesh.element_lengths)
+        with _products.batch(self.mesh.n_max):
+            f = jax.vmap(self._element_dissipative)(
+                self.mesh.element_coordinates(nodes), self.mesh.element_coordinates(velocities),
+                self.mesh.reference_elements, self.mesh.element_lengths)
         f = jnp.where(self.mesh.active[:, None], f, 0.0)
         out = jnp.zeros((self.n_nodes, 4))
         return -out.at[:-1].add(f[:, :4]).at[1:].add(f[:, 4:])

@@ -5,6 +5,8 @@ from __future__ import annotations
 import equinox as eqx
 import jax.numpy as jnp
 
+from ._products import matvec
+
 
 def rotation(theta):
     """Planar rotation matrix A(θ) of a body frame (paper Eq. 19), shape (2, 2)."""
@@ -19,7 +21,7 @@ def body_point(pose, local):
         pose: (x, y, θ) [m, m, rad], shape (3,).
         local: the point in the body frame [m], shape (2,).
     """
-    return pose[:2] + rotation(pose[2]) @ local
+    return pose[:2] + matvec(rotation(pose[2]), local)
 
 
 class RigidBodies(eqx.Module):

@@ -17,6 +17,7 @@ import abc
 import equinox as eqx
 import jax.numpy as jnp
 
+from ._products import matvec
 from .bodies import rotation
 from .element.strain_energy import cross2
 from .functions import AbstractPath
@@ -105,7 +106,7 @@ class FixedJoint(AbstractConstraint):
     def residual(self, system, q, t):
         r = self.point.position(system, q) - self.body_point.position(system, q)
         theta = system.body_pose(q, self.body_point.body)[2]
-        u = rotation(theta) @ self.direction_local
+        u = matvec(rotation(theta), self.direction_local)
         return jnp.concatenate([r, cross2(u, self.point.direction(system, q))[None]])
 
 

@@ -16,6 +16,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from . import _products
+
 
 class BlockTridiagonal(eqx.Module):
     """Block-tridiagonal matrix with ``n`` square blocks of size ``b``.
@@ -87,9 +89,10 @@ class BlockTridiagonal(eqx.Module):
         """Product with a vector x of shape (n_blocks · block_size,)."""
         n, b = self.n_blocks, self.block_size
         xb = jnp.reshape(x, (n, b))
-        y = jnp.einsum("nij,nj->ni", self.diagonal, xb)
-        y = y.at[1:].add(jnp.einsum("nij,nj->ni", self.lower, xb[:-1]))
-        y = y.at[:-1].add(jnp.einsum("nij,nj->ni", self.upper, xb[1:]))
+        with _products.batch(n):
+            y = _products.matvec(self.diagonal, xb)
+            y = y.at[1:].add(_products.matvec(self.lower, xb[:-1]))
+            y = y.at[:-1].add(_products.matvec(self.upper, xb[1:]))
         return jnp.reshape(y, (n * b,))
 
     def add_local(self, positions, a):

@@ -37,7 +37,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import _memory
+from . import _memory, _products
 from .errors import ModelError, SimulationError, SimulationInterrupted
 from .integrate import (DEFAULT_DT, MAX_OUTPUT_BYTES, MAX_STEPS, NO_RETRIES, Checkpoint,  # noqa: F401
                         LoopState, RunLimits, RunOptions, adaptive_failure, initial_loop, integrate_fixed,
@@ -408,10 +408,11 @@ def _run_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, op
     solver = solver.forward_only()  # the chunked loop is never differentiated
     t_end = t0 + n_int * sub * h
     h = jnp.asarray(h)  # traced: runs with other steps reuse the compiled program
-    init_c, c1 = compiled(init_fn, system, state, solver)
-    loop, ctx = init_c(system, state, solver)
     t_stop = jnp.asarray(t_end)
-    chunk_c, c2 = compiled(chunk_fn, system, loop, ctx, solver, h, t_stop, per_chunk, sub, options)
+    with _products.batch(batch or 1):  # products as dot or sums by the batch (_products)
+        init_c, c1 = compiled(init_fn, system, state, solver)
+        loop, ctx = init_c(system, state, solver)
+        chunk_c, c2 = compiled(chunk_fn, system, loop, ctx, solver, h, t_stop, per_chunk, sub, options)
     compile_s = c1 + c2
     tw = time.perf_counter()
     loop, ctx = init_c(system, state, solver)

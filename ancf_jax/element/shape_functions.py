@@ -25,6 +25,8 @@ import functools
 import jax.numpy as jnp
 import numpy as np
 
+from .._products import dot
+
 
 #: Power-basis coefficients of the cubic Hermite polynomials N1…N4 (rows) in
 #: 1, ξ, ξ², ξ³ (columns): the single definition of the interpolation of Eq. 2.
@@ -100,7 +102,7 @@ def interpolate_at(e, points, length, order: int):
         order: 0 (position), 1 (slope r') or 2 (r'').
     """
     weights = jnp.asarray(hermite_table(points, order)) * _scales(length, order)[None, :]
-    return weights @ jnp.reshape(e, (4, 2))
+    return dot(weights, jnp.reshape(e, (4, 2)))
 
 
 def shape_matrix(x, length):
@@ -110,7 +112,7 @@ def shape_matrix(x, length):
 
 
 def _interpolate(weights, e):
-    return weights @ jnp.reshape(e, (4, 2))
+    return dot(weights, jnp.reshape(e, (4, 2)))
 
 
 def position(e, x, length):
