@@ -39,7 +39,7 @@ REFERENCE = dict(newton_tol=1e-11, refresh_every=1, max_iterations=50, rho_inf=0
 #: (refresh_first: refactor after the first correction, for large steps; linear_solver="dense": dense LU,
 #: for small systems; see ancf_jax.integrators.generalized_alpha)
 LARGE_STEP = dict(refresh_first=True, contraction=0.1)
-ANCF_TOLS = dict(full=({}, dict(newton_tol=1e-7), dict(linear_solver="dense"),
+ANCF_TOLS = dict(full=({}, dict(newton_tol=1e-7), dict(newton_tol=1e-5), dict(linear_solver="dense"),
                        dict(newton_tol=1e-7, linear_solver="dense"), dict(newton_tol=1e-5, linear_solver="dense"),
                        LARGE_STEP, dict(LARGE_STEP, linear_solver="dense")),
                  quick=({}, LARGE_STEP, dict(LARGE_STEP, linear_solver="dense")))

@@ -25,9 +25,11 @@ Large steps of a stiff cable (M1 at h = 5 ms): the predictor is millimetres off,
 matrix factored there contracts slowly, steps run out of iterations and are redone in
 substeps; ``ModifiedNewton(refresh_first=True, contraction=0.1)`` converges in about
 5 iterations per step without a failed step. At small steps (M1 at 1 ms: 2 iterations)
-it only adds factorizations, so it is off by default. ``DenseLUSolver`` is faster for
-small unbatched systems (M1, 38 unknowns; measured in ``benchmarks/single_run.py``);
-vmapped batches on the CPU run the block-tridiagonal solver faster.
+it only adds factorizations, so it is off by default. The default block-tridiagonal
+solver (4×4 node blocks inverted by cofactors, no LAPACK calls) is also the faster one
+for small unbatched systems since 2026-12-05 (M1, 38 unknowns: 0.061 against 0.070 s
+for 0–2 s with ``DenseLUSolver``; M2: 0.40 against 0.63 s for 0–3 s;
+``benchmarks/single_run.py`` tries both); ``DenseLUSolver`` serves GPU batches.
 
 Reuse of the Newton matrix (``factor_reuse``). :class:`PerStep` (default) forms and
 factors the matrix at the first iterate of every step. :class:`AcrossSteps` starts each
