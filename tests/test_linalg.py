@@ -130,9 +130,10 @@ def test_interleaved_layout_orders_nodes_of_all_beams_side_by_side(rng):
 
 
 def test_block_inverse_by_cofactors_matches_lu(rng):
-    """The 4×4 cofactor inverse of the chain's diagonal blocks equals LAPACK's inverse to
-    rounding (times the condition number) on batched blocks, nonsymmetric and with
-    entries of mixed scale (positions and slopes), and is NaN/inf on a singular block."""
+    """The chain's diagonal blocks inverted without LAPACK equal LAPACK's inverse to
+    rounding (times the condition number): 4×4 by cofactors, on batched blocks,
+    nonsymmetric and with entries of mixed scale (positions and slopes), NaN/inf on a
+    singular block; the 8×8 and 12×12 blocks of interleaved beams by Schur complements."""
     from ancf_jax.linalg import block_inverse
     a = rng.normal(size=(3, 5, 4, 4)) * np.array([1.0, 1e3, 1.0, 1e-2])[:, None]
     inv = np.asarray(block_inverse(jnp.asarray(a)))
@@ -141,5 +142,8 @@ def test_block_inverse_by_cofactors_matches_lu(rng):
     assert np.all(np.abs(inv - ref) <= 1e-14 * cond * np.abs(ref).max(axis=(-2, -1), keepdims=True))
     singular = np.ones((4, 4))
     assert not np.all(np.isfinite(np.asarray(block_inverse(jnp.asarray(singular)))))
-    six = rng.normal(size=(2, 6, 6))  # interleaved blocks: LAPACK
-    np.testing.assert_allclose(np.asarray(block_inverse(jnp.asarray(six))), np.linalg.inv(six), rtol=1e-10, atol=1e-10)
+    for b in (8, 12, 6, 20):  # interleaved beams: Schur complement of the first 4x4 block; else LAPACK
+        g = rng.normal(size=(2, b, b))
+        spd = g @ np.swapaxes(g, -1, -2) + b * np.eye(b)
+        np.testing.assert_allclose(np.asarray(block_inverse(jnp.asarray(spd))), np.linalg.inv(spd),
+                                   rtol=0, atol=1e-14 * np.abs(np.linalg.inv(spd)).max() * np.linalg.cond(spd).max())

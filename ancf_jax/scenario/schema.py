@@ -652,7 +652,7 @@ def _default(cls, name: str) -> str:
 
 LINEAR_SOLVER_DOC = ("linear solver: auto (chosen from the structure: bordered for beams), bordered "
                      "(block-tridiagonal chain with a dense border), dense (LU of the whole matrix; "
-                     "fastest for small unbatched systems and GPU batches) (default auto)")
+                     "for GPU batches; on the CPU the bordered solver is faster, M1 included) (default auto)")
 
 
 class GeneralizedAlphaOptions(Table):
