@@ -48,8 +48,8 @@ unchanged: the tangent systems of the implicit differentiation are factored at t
 initial iterate of each step as without reuse. Measured
 (``python -m benchmarks.pantograph_catenary reuse``: h = 1 ms, 200 steps, interleaved,
 best of 5, ``benchmarks/results/pantograph_catenary.json``): the 2-span pantograph–catenary (1,937 coordinates, taut wires moving little per step)
-factors 0.185 times per step at 5.0 instead of 3.3 Newton iterations, 7.6 instead of
-11.6 ms per step, 5e-11 m from the per-step run (``max_age`` 64: the same, its
+factors 0.185 times per step at 5.0 instead of 3.3 Newton iterations, 4.5 instead of
+6.6 ms per step (2026-12-05; 7.6 and 11.6 before the block inverses without LAPACK), 5e-11 m from the per-step run (``max_age`` 64: the same, its
 refreshes come from slow contraction); M1 (a stiff wire swinging through large
 rotations) at h = 1.25 ms, 0–2 s (interleaved in one process, best of 9) needs more
 than one factorization per step either way (1.35 at 5.2 iterations instead of 1 at 3.9)
