@@ -12,11 +12,12 @@ beam, the members of :func:`~ancf_jax.simulation.simulate_batch`) says so with
 :func:`batch`; the products below are written as sums while the product of the
 enclosing batch sizes is at most :data:`SMALL_BATCH`.
 
-Measured on 2 cores (jaxlib 0.10.2; ``/usr/bin/time``-free wall times of ``simulate``,
-best of 3 or 5, M1 at single_run's settings): 6 elements, 0–2 s, 0.101 s with ``dot``,
-0.069 s with sums; 24 elements 283 → 262 µs per step; 96 elements 930 → 1267 µs per step
-and 384 elements 3989 → 5176 (so ``dot`` there); a vmapped batch of 64 M1 variants,
-98 ms per simulation with ``dot``, 134 with sums. Results agree to rounding (another
+Measured on 2 cores (jaxlib 0.10.2; ``Results.wall_time_s`` of ``simulate``, best of
+3 or 5, M1 at single_run's settings), ``dot`` against sums: 6 elements, 0–2 s, 0.101
+against 0.069 s; 12 elements 151 against 114 µs per step; 24 elements 262–283 against
+262–276 µs (even); 96 elements 930 against 1267 µs and 384 elements 3989 against 5176
+(so ``dot`` there); a vmapped batch of 64 M1 variants, 98 against 134 ms per
+simulation. Results agree to rounding (another
 summation order).
 """
 
