@@ -28,6 +28,7 @@ iterations per step (measurements: ``benchmarks/``).
 
 from __future__ import annotations
 
+import concurrent.futures
 import math
 import time
 from typing import Any
@@ -37,7 +38,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import _memory, _products
+from . import _memory, _products, _xla
 from .errors import ModelError, SimulationError, SimulationInterrupted
 from .integrate import (DEFAULT_DT, MAX_OUTPUT_BYTES, MAX_STEPS, NO_RETRIES, Checkpoint,  # noqa: F401
                         LoopState, RunLimits, RunOptions, adaptive_failure, initial_loop, integrate_fixed,
@@ -376,8 +377,9 @@ def _signature(args):
     return treedef, sig
 
 
-def compiled(fn, *args):
-    """AOT-compiled ``fn`` for these arguments, cached in-process by their structure.
+def compiled(fn, *args, options=None):
+    """AOT-compiled ``fn`` for these arguments, cached in-process by their structure
+    (``options``: XLA compiler options).
 
     Returns (executable, seconds spent compiling now; 0.0 when cached)."""
     key = (fn, _signature(args))
@@ -387,9 +389,67 @@ def compiled(fn, *args):
     # free programs before the process nears the kernel's memory-map limit (a crash in XLA)
     _memory.relieve()
     t0 = time.perf_counter()
-    exe = fn.lower(*args).compile()
+    exe = fn.lower(*args).compile(options)
     _COMPILED[key] = exe
     return exe, time.perf_counter() - t0
+
+
+#: one background thread for XLA compilations (:func:`compiled_pair`); XLA releases the
+#: GIL while it compiles, so a compilation there overlaps tracing in the caller's thread
+_COMPILER = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="ancf_jax-compile")
+
+
+def _devices(args) -> set:
+    """The devices the JAX arrays of ``args`` are on (empty: no JAX arrays)."""
+    return {d for x in jax.tree.leaves(args) if isinstance(x, jax.Array) for d in x.sharding.device_set}
+
+
+def _placeholders(lowered, device):
+    """Arrays of zeros on ``device`` (None: the default one) shaped as the outputs of an ``eqx.filter_jit``
+    function that ``lowered`` is the lowering of (its static outputs as they are): what
+    a second program can be traced with before the first one is compiled and run.
+    (``device_put`` of NumPy zeros: ``jnp.zeros`` would compile a program per shape. A
+    weakly typed output is passed later to a program traced with a strong zero:
+    accepted.)"""
+    _, dynamic, static = lowered.lowered.out_info
+    zeros = jax.tree.map(lambda s: jax.device_put(np.zeros(s.shape, s.dtype), device), dynamic)
+    return eqx.combine(zeros, static.value)
+
+
+def compiled_pair(first, first_args, second, second_args, first_options=None):
+    """AOT-compiled ``first`` and ``second``, where ``second``'s arguments are made
+    from ``first``'s outputs (``second_args(*outputs)`` returns them), both cached as
+    :func:`compiled` caches.
+
+    When ``first`` is not cached, it is traced and lowered, its XLA compilation runs in
+    a background thread while ``second`` is traced and lowered (with zeros shaped as
+    ``first``'s outputs), and then ``second`` is compiled: the compile time of the pair
+    is about the sum of the two tracings and ``second``'s XLA compilation.
+
+    ``first_options``: XLA compiler options of ``first`` (``second`` gets the defaults).
+
+    Returns (first's executable, second's executable, wall-clock seconds spent
+    compiling now; 0.0 when both were cached)."""
+    key = (first, _signature(first_args))
+    devices = _devices(first_args)
+    if key in _COMPILED or len(devices) > 1:
+        # only the second may be new, or the arguments are sharded (the outputs'
+        # placement is XLA's to choose): one after the other, the second traced with
+        # the first's real outputs
+        exe1, c1 = compiled(first, *first_args, options=first_options)
+        exe2, c2 = compiled(second, *second_args(*exe1(*first_args)))
+        return exe1, exe2, c1 + c2
+    device = devices.pop() if devices else None  # None: JAX's default device
+    _memory.relieve()
+    t0 = time.perf_counter()
+    low1 = first.lower(*first_args)
+    job = _COMPILER.submit(low1.compile, first_options)
+    try:
+        exe2, _ = compiled(second, *second_args(*_placeholders(low1, device)))
+    finally:
+        exe1 = job.result()  # waits, and re-raises the compiler's error, if any
+    _COMPILED[key] = exe1
+    return exe1, exe2, time.perf_counter() - t0
 
 
 def _rows_until_failure(t_rows: np.ndarray, n_rows: int) -> int:
@@ -410,10 +470,10 @@ def _run_fixed(system, state, solver, t0, n_int, sub, h, per_chunk, n_chunks, op
     h = jnp.asarray(h)  # traced: runs with other steps reuse the compiled program
     t_stop = jnp.asarray(t_end)
     with _products.batch(batch or 1):  # products as dot or sums by the batch (_products)
-        init_c, c1 = compiled(init_fn, system, state, solver)
-        loop, ctx = init_c(system, state, solver)
-        chunk_c, c2 = compiled(chunk_fn, system, loop, ctx, solver, h, t_stop, per_chunk, sub, options)
-    compile_s = c1 + c2
+        init_c, chunk_c, compile_s = compiled_pair(
+            init_fn, (system, state, solver), chunk_fn,
+            lambda loop, ctx: (system, loop, ctx, solver, h, t_stop, per_chunk, sub, options),
+            first_options=_xla.run_once_options())  # the initial state runs once
     tw = time.perf_counter()
     loop, ctx = init_c(system, state, solver)
     first = segment_of(loop) if batch is None else eqx.filter_vmap(segment_of)(loop)

@@ -152,7 +152,8 @@ def targets(data: dict) -> list:
             if parts:
                 detail += (f"; separately: chunk program trace+lower {f(parts['chunk_lower_s'])} s + XLA "
                            f"{f(parts['chunk_xla_s'])} s, initial-state program {f(parts['init_lower_s'])} s + "
-                           f"{f(parts['init_xla_s'])} s")
+                           f"{f(parts['init_xla_s'])} s (run-once options; in a run its XLA compilation "
+                           f"overlaps the chunk program's tracing)")
         rows.append((key, c.get(name, {}).get("compile_s"), detail))
     s = data.get("scaling", {})
     counts = [r["elements"] for r in s.get("rows", [])]

@@ -1,0 +1,63 @@
+"""Compilation of a run (ancf_jax.simulation.compiled_pair, ancf_jax._xla): the
+initial-state program compiles in a background thread while the chunk program is traced
+with placeholders of its outputs, and is compiled with the run-once options."""
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ancf_jax import _xla, simulation
+
+
+def test_pair_compiled_once_with_the_signature_of_the_real_outputs():
+    from ancf_jax.models.m1 import m1_model
+    system, state = m1_model(3).build()
+    simulation._COMPILED.clear()
+    first = simulation.simulate(system, state, t_end=0.004, dt=1e-3, progress=False)
+    assert first.compile_time_s > 0.0 and len(simulation._COMPILED) == 2
+    again = simulation.simulate(system, state, t_end=0.004, dt=1e-3, progress=False)
+    assert again.compile_time_s == 0.0 and len(simulation._COMPILED) == 2
+    np.testing.assert_array_equal(again.q, first.q)
+    # the chunk program traced with placeholders is the one the real outputs select
+    solver = simulation.make_solver("generalized-alpha").forward_only()
+    options = simulation.RunOptions()
+
+    def chunk_args(loop, ctx):
+        return (system, loop, ctx, solver, jnp.asarray(1e-3), jnp.asarray(0.004), 4, 1, options)
+
+    simulation._COMPILED.clear()
+    init, _, seconds = simulation.compiled_pair(simulation._init_single, (system, state, solver),
+                                                simulation._chunk_single, chunk_args,
+                                                first_options=_xla.run_once_options())
+    assert seconds > 0.0 and len(simulation._COMPILED) == 2
+    loop, ctx = init(system, state, solver)
+    _, seconds = simulation.compiled(simulation._chunk_single, *chunk_args(loop, ctx))
+    assert seconds == 0.0 and len(simulation._COMPILED) == 2
+    # the initial state compiled with the run-once options equals XLA's defaults' to rounding
+    reference = eqx.filter_jit(simulation._init_fixed)(system, state, solver)[0]
+    for a, b in zip(jax.tree.leaves(loop), jax.tree.leaves(reference)):
+        np.testing.assert_allclose(np.asarray(a), np.asarray(b), rtol=1e-12, atol=1e-14)
+
+
+def test_pair_with_weakly_typed_outputs_and_cached_first():
+    first = eqx.filter_jit(lambda a: (a + 1.0, jax.lax.add(2.0, 0.0)))  # the second output is weak
+    second = eqx.filter_jit(lambda a, b, c: a * b + c)
+    x = jnp.arange(3.0)
+    f, s, seconds = simulation.compiled_pair(first, (x,), second, lambda a, b: (a, b, 1.0))
+    assert seconds > 0.0
+    a, b = f(x)
+    assert b.weak_type
+    np.testing.assert_array_equal(np.asarray(s(a, b, 1.0)), 2.0 * (np.arange(3.0) + 1.0) + 1.0)
+    # cached first, new second (another static argument): traced with the real outputs
+    f2, s2, seconds = simulation.compiled_pair(first, (x,), second, lambda a, b: (a, b, 2.0))
+    assert f2 is f and s2 is not s and seconds > 0.0
+    np.testing.assert_array_equal(np.asarray(s2(a, b, 2.0)), 2.0 * (np.arange(3.0) + 1.0) + 2.0)
+
+
+def test_run_once_options(monkeypatch):
+    monkeypatch.setenv(_xla.ENV, "off")
+    assert _xla.run_once_options() is None
+    monkeypatch.delenv(_xla.ENV)
+    tested = _xla._jaxlib_release() in _xla.TESTED_JAXLIB
+    assert _xla.run_once_options() == (_xla.RUN_ONCE_OPTIONS if tested else None)
