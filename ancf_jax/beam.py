@@ -235,6 +235,14 @@ class Beam(eqx.Module):
         out = jnp.zeros((self.n_nodes, 4))
         return -out.at[:-1].add(f[:, :4]).at[1:].add(f[:, 4:])
 
+    @property
+    def exact_tangent(self) -> bool:
+        """Whether :meth:`element_tangent` is the exact Jacobian of the element force:
+        the β-rate term included (:attr:`rate_stiffness`, a rate law), or β a concrete
+        zero. (False for a β traced or set after construction without
+        :meth:`with_rate_stiffness`: derivatives then refine their tangent solves.)"""
+        return bool(self.rate_stiffness or self.has_rate_law or not _maybe_nonzero(self.beta))
+
     def with_rate_stiffness(self, on: bool = True) -> "Beam":
         """The same beam with :attr:`rate_stiffness` set to ``on`` (for systems whose β
         is changed after construction, e.g. fitted from 0, or batched with others)."""

@@ -20,11 +20,15 @@ caller to keep. Modified Newton converges to the same root with any nonsingular
 approximation of the matrix; only the rate of contraction differs, and the refresh
 rules above catch a matrix that has become too stale.
 
-Derivatives. :meth:`ModifiedNewton.root` wraps the iteration in
-:func:`jax.lax.custom_root`, so ``jax.grad`` and ``jax.jvp`` differentiate the
-converged equations (implicit function theorem) rather than the iterations; the
-tangent systems reuse one factorization at the initial iterate with ``refinement``
-steps of iterative refinement.
+Derivatives. :meth:`ModifiedNewton.root` gives the iteration a custom JVP
+(:func:`jax.custom_jvp`, the closures' values made arguments), so ``jax.grad`` and
+``jax.jvp`` differentiate the converged equations F(x*(θ), θ) = 0 (implicit function
+theorem) rather than the iterations: ẋ = −(∂F/∂x)⁻¹ ∂F/∂θ θ̇, with the Newton matrix
+factored at the solution x* and ``refinement`` steps of iterative refinement against
+the exact linearization of F (none needed where the matrix is the exact Jacobian).
+Reverse mode transposes these linear solves. (``jax.lax.custom_root`` hands its
+tangent solver the linearization but not the solution, so the matrix could only be
+factored at the initial iterate, and refinement was always needed.)
 """
 
 from __future__ import annotations
@@ -69,6 +73,20 @@ def _as_float(tree):
 def _like(tree, template):
     """Leaves of ``tree`` in the dtypes of ``template`` (undoes :func:`_as_float`)."""
     return jax.tree.map(lambda a, t: a.astype(t.dtype), tree, template)
+
+
+def _hoisted(fn, x):
+    """(g, consts) with ``g(x, *consts) == fn(x)``: every value ``fn`` closes over
+    (traced or not, of any dtype) made an argument (``jax.closure_convert`` keeps
+    integer tracers in the closure, which a custom JVP cannot take)."""
+    closed, out_shape = jax.make_jaxpr(fn, return_shape=True)(x)
+    out_tree = jax.tree.structure(out_shape)
+
+    def g(x, *consts):
+        call = jax.extend.core.jaxpr_as_fun(jax.extend.core.ClosedJaxpr(closed.jaxpr, list(consts)))
+        return jax.tree.unflatten(out_tree, call(*jax.tree.leaves(x)))
+
+    return g, tuple(closed.consts)
 
 
 class ModifiedNewton(eqx.Module):
@@ -195,36 +213,61 @@ class ModifiedNewton(eqx.Module):
              refinement: int = 4, chain_factor=None, factors=None, refresh=True) -> NewtonSolution:
         """:meth:`solve`, differentiated implicitly when ``implicit`` (module docstring).
 
+        The tangent systems J ẋ = −∂F/∂θ θ̇ are solved with ``linearize`` factored at the
+        solution, then ``refinement`` steps of iterative refinement against the exact
+        Jacobian of ``residual`` (by ``jax.linearize``). Where ``linearize`` is the
+        exact Jacobian (the generalized-α step at index 3), ``refinement = 0`` gives the
+        exact derivative, and nothing of the residual's linearization is kept for
+        reverse mode; an approximate matrix (the projection without its curvature term,
+        the index-2 step) needs the refinement steps.
+
         ``factors`` and ``refresh`` as for :meth:`solve`: they serve the forward
-        iteration only; the tangent solves factor the matrix at x0 as without them."""
+        iteration only."""
         kw = dict(size=size, chain_factor=chain_factor, factors=factors, refresh=refresh)
         if not implicit:
             return self.solve(residual, linearize, x0, **kw)
+        # the closures' traced values as explicit arguments (custom_jvp differentiates
+        # arguments only): F(x, θ) and the matrix's own arguments
+        res_fn, res_consts = _hoisted(residual, x0)
+        lin_fn, lin_consts = _hoisted(linearize, x0)
+        kept = factors is not None
 
-        def solve(f, x_init):
-            sol = self.solve(f, linearize, x_init, **kw)
-            # auxiliary outputs of custom_root must be floating point
+        def run(x0, held, refresh, res_consts, lin_consts):
+            sol = self.solve(lambda x: res_fn(x, *res_consts), lambda x: lin_fn(x, *lin_consts), x0,
+                             size=size, chain_factor=held[0], factors=held[1], refresh=refresh)
+            # integer and boolean outputs travel as floats (their tangents are zeros)
             aux = (sol.iterations.astype(float), sol.converged.astype(float))
-            if factors is not None:
+            if kept:
                 aux += (sol.factorizations.astype(float), _as_float(sol.factors))
             return sol.x, aux
 
-        def tangent_solve(g, y):
-            # J x = y with the matrix at the initial iterate and iterative refinement
-            # (compiled only into code that differentiates the solve); the first
-            # iterate is J0⁻¹ y (refining from x = 0 would evaluate g(0) = 0: a wasted
-            # linearized residual per step and tangent)
-            fac = self.factor(linearize, jax.lax.stop_gradient(x0), chain_factor)
+        @jax.custom_jvp
+        def implicit_root(x0, held, refresh, res_consts, lin_consts):
+            return run(x0, held, refresh, res_consts, lin_consts)
 
-            def refine(_, x):
-                return x + self.linear_solver.compute(fac, y - g(x))
+        @implicit_root.defjvp
+        def implicit_root_jvp(primals, tangents):
+            x0, held, refresh, res_consts, lin_consts = primals
+            x, aux = run(*primals)
+            # ∂F/∂x ẋ = −∂F/∂θ θ̇ at the solution; x0's and the factors' tangents do not
+            # enter (the root does not depend on them)
+            _, rhs = jax.jvp(lambda c: res_fn(x, *c), (tuple(res_consts),), (tuple(tangents[3]),))
+            fac = self.factor(lambda z: lin_fn(z, *lin_consts), jax.lax.stop_gradient(x), held[0])
+            dx = self.linear_solver.compute(fac, -rhs)
+            if refinement:
+                _, jac = jax.linearize(lambda z: res_fn(z, *jax.lax.stop_gradient(res_consts)), x)
 
-            return jax.lax.fori_loop(0, refinement, refine, self.linear_solver.compute(fac, y))
+                def refine(_, d):
+                    return d + self.linear_solver.compute(fac, -rhs - jac(d))
 
-        x, aux = jax.lax.custom_root(residual, x0, solve, tangent_solve, has_aux=True)
+                dx = jax.lax.fori_loop(0, refinement, refine, dx)
+            return (x, aux), (dx, jax.tree.map(jnp.zeros_like, aux))
+
+        held = jax.lax.stop_gradient((chain_factor, factors))
+        x, aux = implicit_root(x0, held, jnp.asarray(refresh), res_consts, lin_consts)
         aux = jax.lax.stop_gradient(aux)
         iters, conv = aux[0].astype(jnp.int32), aux[1] > 0.5
-        if factors is None:
+        if not kept:
             return NewtonSolution(x, iters, conv, jnp.array(jnp.nan))
         return NewtonSolution(x, iters, conv, jnp.array(jnp.nan), _like(aux[3], factors),
                               aux[2].astype(jnp.int32))

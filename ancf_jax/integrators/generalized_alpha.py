@@ -85,12 +85,24 @@ at a rate O(h) instead of quadratically. Measured on a rigid pendulum at ρ∞ =
 (4.8e-5 m at h = 4 ms to 7.4e-7 m at 0.5 ms over 1 s), above the loop's default
 ``RunOptions.drift_tolerance`` (1e-6 m) at common steps, so index-2 runs raise it.
 
-Differentiable: the root finder's :meth:`~ancf_jax.newton.ModifiedNewton.root` wraps
-the Newton solve in :func:`jax.lax.custom_root`, so ``jax.grad`` and ``jax.jvp`` of a
-trajectory differentiate the converged equations (implicit function theorem) rather
-than the iterations; the tangent systems are solved with the same factors and a few
-steps of iterative refinement.
-"""
+Differentiable: the root finder's :meth:`~ancf_jax.newton.ModifiedNewton.root` gives
+the Newton solve a custom JVP, so ``jax.grad`` and ``jax.jvp`` of a trajectory
+differentiate the converged equations (implicit function theorem) rather than the
+iterations. The tangent systems are solved with the Newton matrix factored at the
+step's solution. At index 3 that matrix is the exact Jacobian of the step residual
+where every beam's :attr:`~ancf_jax.beam.Beam.exact_tangent` holds, so one solve is
+the exact tangent (``refinement`` None: 0; ``tests/test_simulation.py`` checks M1's
+gradient against central differences). Otherwise (index 2, whose matrix leaves out an
+O(h) term; a β set after the build without
+:meth:`~ancf_jax.system.System.with_rate_stiffness`) :data:`APPROXIMATE_MATRIX_REFINEMENT`
+steps of iterative refinement against the residual's exact linearization make up the
+difference. Measured on M1's damping loss (``python -m benchmarks.gradient``, β set
+after the build, 0–2 s): value and gradient 2.8× a forward run unrefined (3e-4 off),
+4.0× with one refinement step (1.2e-7 off the 8-step gradient), 5.1× with the default
+4; with the β-rate term in the matrix no refinement is needed, but the forward run
+took 2.3× longer (53 against 23 ms for 0–1 s). Until 2026-12-05 the matrix was
+factored at the predictor, and the step sat in a conditional that reverse mode copied
+every residual through: 6.9× at 2 refinement steps."""
 
 from __future__ import annotations
 
@@ -108,11 +120,21 @@ from ..validation import check_count
 from .base import AbstractIntegrator, Carry, StepInfo
 
 
+#: iterative-refinement steps of the tangent solves of derivatives where the Newton
+#: matrix is not the exact Jacobian of the step residual (index 2; a beam whose β-rate
+#: term is left out, :attr:`~ancf_jax.beam.Beam.exact_tangent`); 4 steps reach the
+#: 8-step gradient of M1's damping loss to 5e-11 (``python -m benchmarks.gradient``)
+APPROXIMATE_MATRIX_REFINEMENT = 4
+
+
 class AbstractConstraintLevel(eqx.Module):
     """Which constraint equations a generalized-α step solves with the equations of
     motion (module docstring)."""
 
     index: eqx.AbstractClassVar[int]
+    #: iterative-refinement steps the tangent solves of derivatives need: 0 where the
+    #: step's Newton matrix is the exact Jacobian of its residual (module docstring)
+    refinement: eqx.AbstractClassVar[int]
 
     @abc.abstractmethod
     def residual(self, system, q, v, t, gamma_p):
@@ -125,6 +147,7 @@ class PositionLevel(AbstractConstraintLevel):
     """Index 3: Φ(q_{n+1}, t_{n+1}) = 0 [m] (the default)."""
 
     index: ClassVar[int] = 3
+    refinement: ClassVar[int] = 0
 
     def residual(self, system, q, v, t, gamma_p):
         return system.constraint(q, t)
@@ -135,6 +158,7 @@ class VelocityLevel(AbstractConstraintLevel):
     (Exudyn's ``useIndex2Constraints``)."""
 
     index: ClassVar[int] = 2
+    refinement: ClassVar[int] = APPROXIMATE_MATRIX_REFINEMENT
 
     def residual(self, system, q, v, t, gamma_p):
         return system.constraint_velocity(q, v, t) / gamma_p
@@ -238,7 +262,9 @@ class GeneralizedAlpha(AbstractIntegrator):
             correction, refresh policy, linear solver).
         velocity_projection: project v onto the velocity constraints after each step
             (default off: module docstring).
-        refinement: iterative-refinement steps of the tangent solves (derivatives).
+        refinement: iterative-refinement steps of the tangent solves (derivatives;
+            integer >= 0); None: as many as the Newton matrix needs
+            (:meth:`tangent_refinement`: 0 where it is exact).
         implicit_diff: differentiate the converged step equations (implicit function
             theorem) instead of the Newton iterations.
         constraints: the constraint level, :class:`PositionLevel` (index 3, default)
@@ -250,7 +276,7 @@ class GeneralizedAlpha(AbstractIntegrator):
     rho_inf: float = eqx.field(static=True, default=0.9)
     root_finder: ModifiedNewton = ModifiedNewton()
     velocity_projection: bool = eqx.field(static=True, default=False)
-    refinement: int = eqx.field(static=True, default=4)
+    refinement: int | None = eqx.field(static=True, default=None)
     implicit_diff: bool = eqx.field(static=True, default=True)
     constraints: AbstractConstraintLevel = PositionLevel()
     factor_reuse: AbstractFactorReuse = PerStep()
@@ -269,6 +295,17 @@ class GeneralizedAlpha(AbstractIntegrator):
         and the velocity projection)."""
         return self.root_finder.linear_solver
 
+    def tangent_refinement(self, system) -> int:
+        """Iterative-refinement steps of the tangent solves for ``system``:
+        ``refinement``, or when None 0 where the step's Newton matrix is exact (index 3,
+        every beam's :attr:`~ancf_jax.beam.Beam.exact_tangent`), else
+        :data:`APPROXIMATE_MATRIX_REFINEMENT`."""
+        if self.refinement is not None:
+            return self.refinement
+        if not all(b.exact_tangent for b in system.beams):
+            return max(self.constraints.refinement, APPROXIMATE_MATRIX_REFINEMENT)
+        return self.constraints.refinement
+
     @property
     def coefficients(self):
         r = self.rho_inf
@@ -281,9 +318,13 @@ class GeneralizedAlpha(AbstractIntegrator):
     def prepare(self, system):
         return dae.mass_chain_factor(system)
 
+    def __check_init__(self):
+        if self.refinement is not None:
+            check_count("refinement", self.refinement, 0, 50)
+
     def forward_only(self) -> "GeneralizedAlpha":
-        # lax.custom_root traces the tangent solve (a second factorization) and the
-        # residual once more even when nothing is differentiated: ~1 s of tracing
+        # the implicit derivative traces the tangent solve (a second factorization) and
+        # the residual once more even when nothing is differentiated: ~1 s of tracing
         return dataclasses.replace(self, implicit_diff=False) if self.implicit_diff else self
 
     def _initial_memory(self, system, q, v, lam, t):
@@ -350,7 +391,7 @@ class GeneralizedAlpha(AbstractIntegrator):
         y0 = dae.to_solver_order(system, jnp.zeros_like(carry.q), carry.lam)
         factors, refresh = self.factor_reuse.start(carry.memory, h)
         sol = self.root_finder.root(residual, linearize, y0, size=n, implicit=self.implicit_diff,
-                                    refinement=self.refinement, factors=factors, refresh=refresh)
+                                    refinement=self.tangent_refinement(system), factors=factors, refresh=refresh)
         memory = self.factor_reuse.update(carry.memory, sol, h)
         q1, v1, qdd, a1, lam = kinematics(sol.x)
         if self.velocity_projection and system.n_constraints:
