@@ -157,6 +157,53 @@ def test_failed_batch_member_takes_negligible_steps():
     assert np.all(after[:, 2] <= 2)  # negligible steps: Newton converges at once
 
 
+def test_steps_past_the_end_or_a_failure_are_skipped_by_blocks():
+    """Unbatched, the steps of a chunk are selected, not branched, and blocks of output
+    intervals past the run's end (or its failure) are skipped whole
+    (``integrate.BLOCK_STEPS``): at most the rest of the last block is computed, as
+    negligible frozen steps, and the results are those of the pure ``trajectory``
+    (no end, no blocks). M1 at h = 4 ms with 6 Newton iterations and no retries: 15
+    steps of a 500-step chunk (blocks of 10 steps); α = 0.02 1/s fails at the 4th
+    step (the batch test above), α = 0.03 with a tenth of gravity runs through."""
+    import equinox as eqx
+
+    from ancf_jax.integrate import BLOCK_STEPS, FROZEN_STEP
+    from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
+    from ancf_jax.models.m1 import m1_model
+    from ancf_jax.newton import ModifiedNewton
+    from ancf_jax.simulation import simulate, trajectory
+
+    class LoggedSteps(GeneralizedAlpha):
+        def step(self, system, carry, h, context):
+            new, info = super().step(system, carry, h, context)
+            jax.debug.callback(_log_step, system.beams[0].alpha, h, info.iterations)
+            return new, info
+
+    system, state = m1_model(6).build()
+    solver = LoggedSteps(root_finder=ModifiedNewton(max_iterations=6))
+    h, t_end, steps = 4e-3, 0.06, 15
+    for alpha, g, ok in ((0.02, 1.0, False), (0.03, 0.1, True)):
+        s = eqx.tree_at(lambda s: (s.beams[0].alpha, s.gravity), system,
+                        (jax.numpy.asarray(alpha), g * system.gravity))
+        _STEP_LOG.clear()
+        res = simulate(s, state, t_end=t_end, dt=h, output_dt=h, options=RunOptions(max_halvings=0),
+                       solver=solver, on_failure="return", progress=False)
+        log = np.concatenate(_STEP_LOG)
+        taken = int(np.sum(np.isclose(log[:, 1], h)))
+        frozen = log[taken:]
+        np.testing.assert_allclose(log[:taken, 1], h)
+        np.testing.assert_allclose(frozen[:, 1], FROZEN_STEP * h)
+        assert len(log) % 10 == 0 and len(frozen) < 10 <= BLOCK_STEPS  # up to the end of one block
+        if ok:
+            assert res.status == "ok" and taken == steps and len(frozen) == 5
+            seg, loop = jax.jit(lambda s: trajectory(s, state, solver.forward_only(), t_end=t_end, dt=h))(s)
+            np.testing.assert_allclose(res.q, np.asarray(seg.q), rtol=0, atol=1e-12)
+        else:
+            assert res.status == "newton" and taken == 4 and len(frozen) == 6
+            assert np.all(frozen[:, 2] <= 2)  # negligible steps: Newton converges at once
+            assert len(res.t) == 4 and np.all(np.isfinite(res.q))
+
+
 def test_a_sliding_joint_moving_more_than_half_an_element_is_a_failed_step():
     """``sliding_jumped``: a step that moves a sliding coordinate by more than
     ``max_sliding_step`` (0.5) of the element it starts in is taken for a spurious
