@@ -110,6 +110,21 @@ def _log_step(alpha, h, iterations):
     _STEP_LOG.append(np.column_stack([np.ravel(alpha), np.ravel(h), np.ravel(iterations)]))
 
 
+def _logged_solver(max_iterations):
+    """Generalized-α that logs (α of beam 0, h, Newton iterations) of every step it
+    computes into _STEP_LOG."""
+    from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
+    from ancf_jax.newton import ModifiedNewton
+
+    class LoggedSteps(GeneralizedAlpha):
+        def step(self, system, carry, h, context):
+            new, info = super().step(system, carry, h, context)
+            jax.debug.callback(_log_step, system.beams[0].alpha, h, info.iterations)
+            return new, info
+
+    return LoggedSteps(root_finder=ModifiedNewton(max_iterations=max_iterations))
+
+
 def test_failed_batch_member_takes_negligible_steps():
     """Under vmap ``lax.cond`` is a select: a member that has failed still computes a
     step (discarded). It must take a negligible step from its last good state (Newton
@@ -121,16 +136,8 @@ def test_failed_batch_member_takes_negligible_steps():
     import equinox as eqx
 
     from ancf_jax.integrate import FROZEN_STEP
-    from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
     from ancf_jax.models.m1 import m1_model
-    from ancf_jax.newton import ModifiedNewton
     from ancf_jax.simulation import simulate_batch
-
-    class LoggedSteps(GeneralizedAlpha):
-        def step(self, system, carry, h, context):
-            new, info = super().step(system, carry, h, context)
-            jax.debug.callback(_log_step, system.beams[0].alpha, h, info.iterations)
-            return new, info
 
     system, state = m1_model(6).build()
     # the survivor: another α (to tell the members apart in the log) and a tenth of
@@ -142,7 +149,7 @@ def test_failed_batch_member_takes_negligible_steps():
     h, t_end = 4e-3, 0.06
     _STEP_LOG.clear()
     res = simulate_batch(systems, [state] * 2, t_end=t_end, dt=h, output_dt=h,
-                         options=RunOptions(max_halvings=0), solver=LoggedSteps(root_finder=ModifiedNewton(max_iterations=6)), on_failure="return",
+                         options=RunOptions(max_halvings=0), solver=_logged_solver(6), on_failure="return",
                          progress=False, limits=RunLimits(chunks=1))
     assert res[0].status == "newton" and res[1].status == "ok"
     n_ok = int(round(res[0].failure_time / h)) - 1  # steps completed before the failing one
@@ -168,19 +175,11 @@ def test_steps_past_the_end_or_a_failure_are_skipped_by_blocks():
     import equinox as eqx
 
     from ancf_jax.integrate import BLOCK_STEPS, FROZEN_STEP
-    from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
     from ancf_jax.models.m1 import m1_model
-    from ancf_jax.newton import ModifiedNewton
     from ancf_jax.simulation import simulate, trajectory
 
-    class LoggedSteps(GeneralizedAlpha):
-        def step(self, system, carry, h, context):
-            new, info = super().step(system, carry, h, context)
-            jax.debug.callback(_log_step, system.beams[0].alpha, h, info.iterations)
-            return new, info
-
     system, state = m1_model(6).build()
-    solver = LoggedSteps(root_finder=ModifiedNewton(max_iterations=6))
+    solver = _logged_solver(6)
     h, t_end, steps = 4e-3, 0.06, 15
     for alpha, g, ok in ((0.02, 1.0, False), (0.03, 0.1, True)):
         s = eqx.tree_at(lambda s: (s.beams[0].alpha, s.gravity), system,
