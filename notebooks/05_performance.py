@@ -20,8 +20,8 @@
 # 1. run in batches — many parameter sets or meshes in one compiled, vmapped program
 #    (`simulate_batch`, or `jax.vmap` over the pure `trajectory`), and
 # 2. differentiate — `jax.grad` of any functional of a trajectory. The generalized-α
-#    Newton solves are wrapped in `lax.custom_root`, so the derivative is that of the
-#    converged equations (implicit function theorem), not of the iterations.
+#    Newton solves have a custom JVP, so the derivative is that of the converged
+#    equations (implicit function theorem), not of the iterations.
 #
 # The example is model M1 (notebook 02); any model built with `ancf_jax.model.Model` or
 # loaded from a scenario file works the same way. `ANCF_JAX_QUICK=1` shortens the runs.
