@@ -23,6 +23,28 @@ elements) 0.69 s → 0.38 s, run 0.38 → 0.45 ms; M2 (24 elements) 0.92 s → 0
 0.42 → 0.92 ms; 384 elements 0.75 s → 0.44 s, run 1.7 → 3.2 ms. (The chunk program, which
 runs every step, stays optimized: at level 0 M1's steps ran 4.8× slower.)
 
+Loop kernels (opt-in: ``ANCF_JAX_LOOP_KERNELS=1``). XLA:CPU runs a program as a
+sequence of small compiled kernels ("thunks"), one per fusion, each dispatched on its
+own; the step of a small model is hundreds of them, a few tens of nanoseconds each, and
+that dispatch is most of its cost (M1, 6 elements: ~20 of 35 µs per step,
+``python -m benchmarks.step_profile``). XLA can instead compile a while loop whose
+instructions touch at most ``xla_cpu_small_while_loop_byte_threshold`` bytes into one
+kernel (its small-while-loop hoisting pass; XLA's default threshold is 1,024 bytes). With the
+switch on, ancf_jax raises it to :data:`LOOP_KERNEL_BYTES`, so that a small model's
+whole Newton loop (residual, Newton matrix, factorization, solves) becomes one kernel,
+and factors the small dense matrices of its solves without LAPACK
+(:func:`ancf_jax.linalg.lu_factor`: a LAPACK call inside a loop keeps the loop out of
+the pass). Measured on 2 cores (jaxlib 0.10.2, no cache, fresh processes;
+``python -m benchmarks.loop_kernels``, ``benchmarks/results/loop_kernels.json``): the
+M1 run (0–2 s) about 2× faster, its first call (compilation) about 2.7× slower; larger
+models gain nothing (M2, 24 elements: within a few per cent, slower) and vmapped batches
+are not affected (their loops exceed the threshold). Results agree with the default to
+rounding (other instruction orders). Off by default for the compile time; worth it for
+long runs or many runs of one small model (the persistent compilation cache keeps the
+compiled program between processes). Like the flags above it must be set before JAX
+starts a backend; a user's own ``xla_backend_extra_options`` in ``XLA_FLAGS`` is left
+as it is (:func:`loop_kernels` reads the threshold from there).
+
 An unknown flag in ``XLA_FLAGS`` aborts the process, and XLA renames and removes
 flags between releases, so the flags are added only for the jaxlib releases they were
 measured with (:data:`TESTED_JAXLIB`); other releases run with XLA's defaults.
@@ -33,6 +55,7 @@ changed once a JAX backend is running (the flags could no longer take effect).
 from __future__ import annotations
 
 import os
+import re
 
 #: environment variable that turns the defaults off (0/off/false/no)
 ENV = "ANCF_JAX_XLA_FLAGS"
@@ -43,6 +66,17 @@ DEFAULT_FLAGS = ("--xla_cpu_use_fusion_emitters=false",)
 
 #: compiler options of the programs that run once per simulation (see the module docstring)
 RUN_ONCE_OPTIONS = {"xla_backend_optimization_level": 0}
+
+#: environment variable that turns loop kernels on (1/on/true/yes; module docstring)
+LOOP_KERNELS_ENV = "ANCF_JAX_LOOP_KERNELS"
+_ON = ("1", "on", "true", "yes")
+
+#: threshold [bytes] of XLA:CPU's small-while-loop hoisting with loop kernels on: M1's
+#: Newton loop (~0.5 MB accessed) becomes one kernel, a vmapped batch's does not
+#: (``python -m benchmarks.loop_kernels``: 0.26 MB hoists only the chain scans, no gain)
+LOOP_KERNEL_BYTES = 1_000_000
+
+_THRESHOLD = "xla_cpu_small_while_loop_byte_threshold"
 
 #: jaxlib releases (major, minor) the flags were measured with
 TESTED_JAXLIB = ((0, 10),)
@@ -72,18 +106,36 @@ def with_default_flags(flags: str) -> str:
     return " ".join([flags.strip(), *extra]).strip()
 
 
+def with_loop_kernels(flags: str) -> str:
+    """``flags`` with XLA's small-while-loop threshold raised to :data:`LOOP_KERNEL_BYTES`,
+    unless they name ``xla_backend_extra_options`` already (the user's own, kept)."""
+    if "xla_backend_extra_options" in flags:
+        return flags.strip()
+    return f"{flags.strip()} --xla_backend_extra_options={_THRESHOLD}={LOOP_KERNEL_BYTES}".strip()
+
+
+def loop_kernels() -> bool:
+    """Whether XLA may compile loops into single kernels in this process: ``XLA_FLAGS``
+    sets ``xla_cpu_small_while_loop_byte_threshold`` (by ``ANCF_JAX_LOOP_KERNELS`` or
+    by the user) above XLA's default (1,024 bytes). Read when a program is traced:
+    :func:`ancf_jax.linalg.lu_factor` then keeps LAPACK out of small solves."""
+    match = re.search(_THRESHOLD + r"=(\d+)", os.environ.get("XLA_FLAGS", ""))
+    return match is not None and int(match.group(1)) > 1024
+
+
 def configure_xla_flags() -> str | None:
-    """Add :data:`DEFAULT_FLAGS` to ``XLA_FLAGS`` as the module docstring says.
+    """Add :data:`DEFAULT_FLAGS` to ``XLA_FLAGS`` as the module docstring says, and the
+    loop-kernel threshold where ``ANCF_JAX_LOOP_KERNELS`` asks for it.
 
     Returns:
         the resulting ``XLA_FLAGS``, or None when nothing was changed.
     """
-    if os.environ.get(ENV, "").strip().lower() in _OFF:
-        return None
     if _jaxlib_release() not in TESTED_JAXLIB or _backend_running():
         return None
     current = os.environ.get("XLA_FLAGS", "")
-    new = with_default_flags(current)
+    new = current.strip() if os.environ.get(ENV, "").strip().lower() in _OFF else with_default_flags(current)
+    if os.environ.get(LOOP_KERNELS_ENV, "").strip().lower() in _ON:
+        new = with_loop_kernels(new)
     if new == current.strip():
         return None
     os.environ["XLA_FLAGS"] = new

@@ -16,7 +16,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import _products
+from . import _products, _xla
 
 
 class BlockTridiagonal(eqx.Module):
@@ -330,13 +330,25 @@ def solve_chain(f: ChainFactor, r):
 
 
 # ---------------------------------------------------------------------- dense LU
+#: largest matrix that :func:`lu_factor` factors elementwise (without LAPACK) when XLA
+#: compiles loops into kernels (:func:`ancf_jax._xla.loop_kernels`)
+ELEMENTWISE_LU = 24
+
+
 def lu_factor(a):
     """LU factors with partial pivoting of a square matrix: ``(lu, permutation)``.
 
     Unlike ``jax.scipy.linalg.lu_factor`` this keeps the row permutation that the
     factorization computes, so a solve is one gather and two triangular solves; the
     scipy form stores LAPACK pivots and converts them to a permutation in every solve,
-    a loop over the rows that dominated the Newton iterations of vmapped runs."""
+    a loop over the rows that dominated the Newton iterations of vmapped runs.
+
+    LAPACK (``jax.lax.linalg.lu``) by default; with loop kernels on
+    (:func:`ancf_jax._xla.loop_kernels`) matrices up to :data:`ELEMENTWISE_LU` are
+    factored by :func:`lu_factor_elementwise`, as a LAPACK call keeps the loop around
+    it (the Newton iteration) from becoming one kernel."""
+    if a.shape[-1] <= ELEMENTWISE_LU and _xla.loop_kernels():
+        return lu_factor_elementwise(a)
     lu, _, perm = jax.lax.linalg.lu(a)
     return lu, perm
 
@@ -346,9 +358,51 @@ def lu_solve(factors, b):
     lu, perm = factors
     vec = b.ndim == 1
     x = jnp.reshape(b, (b.shape[0], -1))[perm]
-    x = jax.lax.linalg.triangular_solve(lu, x, left_side=True, lower=True, unit_diagonal=True)
-    x = jax.lax.linalg.triangular_solve(lu, x, left_side=True, lower=False)
+    if lu.shape[-1] <= ELEMENTWISE_LU and _xla.loop_kernels():
+        x = triangular_solve_elementwise(lu, x)
+    else:
+        x = jax.lax.linalg.triangular_solve(lu, x, left_side=True, lower=True, unit_diagonal=True)
+        x = jax.lax.linalg.triangular_solve(lu, x, left_side=True, lower=False)
     return x[:, 0] if vec else x
+
+
+def lu_factor_elementwise(a):
+    """:func:`lu_factor` of an n×n matrix by Gaussian elimination with partial pivoting,
+    unrolled over the n (static) columns in elementwise operations and products with
+    unit vectors: no LAPACK call, no gather or scatter. Same factors as LAPACK's
+    ``getrf`` (L unit lower and U in one array, rows permuted by ``perm``) up to
+    rounding and the choice among equal pivots. For small n (the border of a saddle
+    system): n stages of O(n²) work."""
+    n = a.shape[-1]
+    rows = jnp.arange(n)
+    perm = rows
+    for k in range(n):
+        # the pivot: largest |a_ik| at or below the diagonal; swap rows k and p
+        p = jnp.argmax(jnp.where(rows >= k, jnp.abs(a[:, k]), -1.0))
+        e_k, e_p = (rows == k).astype(a.dtype), (rows == p).astype(a.dtype)
+        row_k, row_p = a[k], e_p @ a
+        a = a + jnp.outer(e_k - e_p, row_p - row_k)
+        perm = jnp.where(rows == k, jnp.sum(jnp.where(rows == p, perm, 0)), jnp.where(rows == p, perm[k], perm))
+        # eliminate below the pivot; the multipliers stored in column k
+        below = rows > k
+        lower = jnp.where(below, a[:, k] / a[k, k], 0.0)
+        a = a - jnp.outer(lower, jnp.where(below, a[k], 0.0))
+        a = jnp.where(below[:, None] & (rows == k)[None, :], lower[:, None], a)
+    return a, perm
+
+
+def triangular_solve_elementwise(lu, x):
+    """Solve L U y = x with the factors of :func:`lu_factor_elementwise` (L unit lower),
+    x shape (n, k), rows already permuted: forward and back substitution unrolled over
+    the n columns in elementwise operations."""
+    n = lu.shape[-1]
+    rows = jnp.arange(n)[:, None]
+    for k in range(n):
+        x = x - jnp.where(rows > k, lu[:, k:k + 1], 0.0) * x[k]
+    for k in range(n - 1, -1, -1):
+        xk = x[k] / lu[k, k]
+        x = jnp.where(rows == k, xk, x - jnp.where(rows < k, lu[:, k:k + 1], 0.0) * xk)
+    return x
 
 
 # ---------------------------------------------------------------------- saddle systems

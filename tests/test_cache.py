@@ -37,7 +37,7 @@ FLAGS_CODE = ("{pre}import os, ancf_jax, jax, jax.numpy as jnp; float(jnp.ones(3
 
 
 def flags_in_fresh_process(pre="", **env):
-    e = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "ANCF_JAX_XLA_FLAGS")}
+    e = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "ANCF_JAX_XLA_FLAGS", "ANCF_JAX_LOOP_KERNELS")}
     e.update(JAX_PLATFORMS="cpu", **env)
     out = subprocess.run([sys.executable, "-c", FLAGS_CODE.format(pre=pre)], env=e,
                          capture_output=True, text=True, check=True)
@@ -54,5 +54,11 @@ def test_xla_flags_setting():
         mine = default.replace("=false", "=true")
         assert mine != default and flags_in_fresh_process(XLA_FLAGS=mine) == f"{mine!r} 1"
     assert flags_in_fresh_process(ANCF_JAX_XLA_FLAGS="off") == "None 1"      # switched off
+    if default:  # loop kernels asked for: the threshold added, a user's own extra options kept
+        loops = f"--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold={_xla.LOOP_KERNEL_BYTES}"
+        assert flags_in_fresh_process(ANCF_JAX_LOOP_KERNELS="1") == f"{default + ' ' + loops!r} 1"
+        assert flags_in_fresh_process(ANCF_JAX_LOOP_KERNELS="1", ANCF_JAX_XLA_FLAGS="off") == f"{loops!r} 1"
+        own = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=5000"
+        assert flags_in_fresh_process(ANCF_JAX_LOOP_KERNELS="1", XLA_FLAGS=own) == f"{own + ' ' + default!r} 1"
     # a backend started before ancf_jax is imported: nothing changed (too late to act)
     assert flags_in_fresh_process(pre="import jax; jax.devices(); ") == "None 1"

@@ -61,3 +61,54 @@ def test_run_once_options(monkeypatch):
     monkeypatch.delenv(_xla.ENV)
     tested = _xla._jaxlib_release() in _xla.TESTED_JAXLIB
     assert _xla.run_once_options() == (_xla.RUN_ONCE_OPTIONS if tested else None)
+
+
+# Loop kernels (ANCF_JAX_LOOP_KERNELS=1, ancf_jax._xla): a fresh process (the flag acts when
+# the backend starts); the chunk program without LAPACK calls, the run equal to the
+# default's to rounding (other instruction orders).
+LOOP_KERNEL_CODE = """
+import json, sys, numpy as np
+sys.path.insert(0, {root!r})
+from tests.test_compile import m1_chunk_text
+from ancf_jax import _xla, simulation
+from ancf_jax.models.m1 import m1_model
+system, state = m1_model(3).build()
+r = simulation.simulate(system, state, t_end=0.02, dt=1e-3, progress=False)
+print(json.dumps(dict(on=_xla.loop_kernels(), lapack="lapack" in m1_chunk_text(system, state),
+                      q=np.asarray(r.q).tolist(), status=r.status)))
+"""
+
+
+def m1_chunk_text(system, state):
+    """The lowered (unoptimized) chunk program of a 0.02 s M1 run at dt = 1 ms."""
+    options = simulation.RunOptions()
+    solver, (n_int, sub, h, _), (per_chunk, _) = simulation._prepare(
+        0.02, 1e-3, simulation.make_solver("generalized-alpha"), None, options, simulation.RunLimits(),
+        "return", batched=False)
+    solver = solver.forward_only()
+    loop, ctx = simulation._init_single(system, state, solver)
+    args = (system, loop, ctx, solver, jnp.asarray(h), jnp.asarray(n_int * sub * h), per_chunk, sub, options)
+    return simulation._chunk_single.lower(*args).as_text()
+
+
+def test_loop_kernels_give_the_default_run_without_lapack_in_the_step():
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from ancf_jax.models.m1 import m1_model
+    root = str(Path(__file__).resolve().parents[1])
+    env = dict(os.environ, ANCF_JAX_LOOP_KERNELS="1")
+    env["XLA_FLAGS"] = env.get("XLA_FLAGS", "").replace("xla_backend_extra_options", "")  # ours, not a user's
+    out = subprocess.run([sys.executable, "-c", LOOP_KERNEL_CODE.format(root=root)], env=env, cwd=root,
+                         capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr[-3000:]
+    child = json.loads(out.stdout.strip().splitlines()[-1])
+    system, state = m1_model(3).build()
+    assert "lapack" in m1_chunk_text(system, state) and not _xla.loop_kernels()  # this process: the default
+    tested = _xla._jaxlib_release() in _xla.TESTED_JAXLIB
+    assert child["on"] == tested and child["lapack"] == (not tested) and child["status"] == "ok"
+    r = simulation.simulate(system, state, t_end=0.02, dt=1e-3, progress=False)
+    np.testing.assert_allclose(child["q"], r.q, rtol=0, atol=1e-12)

@@ -82,21 +82,50 @@ def test_implicitly_differentiated_solve_has_the_derivatives_of_a_dense_solve(rn
                                jax.grad(lambda q: dense_solve(q) @ w)(p), rtol=1e-9, atol=1e-12)
 
 
-def test_lu_keeps_the_permutation_and_solves_with_pivoting(rng):
+# both factorizations: LAPACK (default) and the elementwise one that loop kernels select
+# (ancf_jax._xla.loop_kernels reads XLA_FLAGS when a program is traced)
+LOOP_KERNEL_FLAGS = {"lapack": "", "elementwise": "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=1000000"}
+
+
+@pytest.fixture(params=sorted(LOOP_KERNEL_FLAGS))
+def lu_kind(request, monkeypatch):
+    monkeypatch.setenv("XLA_FLAGS", LOOP_KERNEL_FLAGS[request.param])
+    return request.param
+
+
+def _primitives(f, *args):
+    return {e.primitive.name for e in jax.make_jaxpr(f)(*args).jaxpr.eqns}
+
+
+def test_lu_keeps_the_permutation_and_solves_with_pivoting(rng, lu_kind):
     a = rng.normal(size=(7, 7))
     a[0, 0] = 0.0  # needs a row exchange
+    a[3, :] = 1e-3 * a[3, :]  # and a small row, which partial pivoting must not pick
     rhs = rng.normal(size=(7, 2))
     f = lu_factor(jnp.asarray(a))
     np.testing.assert_allclose(lu_solve(f, jnp.asarray(rhs)), np.linalg.solve(a, rhs), rtol=1e-10, atol=1e-12)
     np.testing.assert_allclose(lu_solve(f, jnp.asarray(rhs[:, 1])), np.linalg.solve(a, rhs[:, 1]),
                                rtol=1e-10, atol=1e-12)
+    # the same factors and row order as LAPACK's getrf, to rounding
+    lu, _, perm = jax.lax.linalg.lu(jnp.asarray(a))
+    np.testing.assert_array_equal(f[1], perm)
+    np.testing.assert_allclose(f[0], lu, rtol=0, atol=1e-14 * np.abs(a).max())
+    used = _primitives(lambda m, r: lu_solve(lu_factor(m), r), jnp.asarray(a), jnp.asarray(rhs))
+    assert ("lu" in used and "triangular_solve" in used) == (lu_kind == "lapack")
 
 
-def test_lu_under_vmap(rng):
+def test_lu_under_vmap(rng, lu_kind):
     a = rng.normal(size=(4, 6, 6)) + 3.0 * np.eye(6)
     rhs = rng.normal(size=(4, 6))
     x = jax.vmap(lambda m, r: lu_solve(lu_factor(m), r))(jnp.asarray(a), jnp.asarray(rhs))
     np.testing.assert_allclose(x, np.linalg.solve(a, rhs[..., None])[..., 0], rtol=1e-10, atol=1e-12)
+
+
+def test_elementwise_lu_only_for_small_matrices(monkeypatch):
+    from ancf_jax.linalg import ELEMENTWISE_LU
+    monkeypatch.setenv("XLA_FLAGS", LOOP_KERNEL_FLAGS["elementwise"])
+    assert "lu" not in _primitives(lu_factor, jnp.eye(ELEMENTWISE_LU))
+    assert "lu" in _primitives(lu_factor, jnp.eye(ELEMENTWISE_LU + 1))
 
 
 def test_add_local_matches_a_dense_scatter(rng):
