@@ -36,9 +36,10 @@ and factors the small dense matrices of its solves without LAPACK
 (:func:`ancf_jax.linalg.lu_factor`: a LAPACK call inside a loop keeps the loop out of
 the pass). Measured on 2 cores (jaxlib 0.10.2, no cache, fresh processes;
 ``python -m benchmarks.loop_kernels``, ``benchmarks/results/loop_kernels.json``): the
-M1 run (0–2 s) about 2× faster, its first call (compilation) about 2.7× slower; larger
-models gain nothing (M2, 24 elements: within a few per cent, slower) and vmapped batches
-are not affected (their loops exceed the threshold). Results agree with the default to
+M1 run (0–2 s, 6 elements) 0.055 → 0.029 s, 1.9× faster (0.44 → 0.23 of Exudyn's run),
+with 12 elements 1.5× faster, its first call (compilation) 2.9 → 8.0 s; larger models
+gain nothing (M1 with 24 elements the same, M2 with 24 elements 9 % slower, compile +1 s)
+and vmapped batches are not affected (their loops exceed the threshold). Results agree with the default to
 rounding (other instruction orders). Off by default for the compile time; worth it for
 long runs or many runs of one small model (the persistent compilation cache keeps the
 compiled program between processes). Like the flags above it must be set before JAX

@@ -119,6 +119,8 @@ def targets(data: dict) -> list:
                        f"solves {prof['iterations_per_step'] * pp['solve'] * us:.0f}, powers {pp['powers'] * us:.0f}, "
                        f"control flow of the loops {(prof['control_flow_s'] + prof['run_loop_s']) * us:.0f}, of "
                        f"{prof['simulate_per_step_s'] * us:.0f}")
+        if model == "M1" and value is not None:
+            detail += _loop_kernel_target_note()
         rows.append((key, value, detail))
     b = data.get("batch", {})
     value, detail = None, "not run"
@@ -359,6 +361,46 @@ def _m1_ratio_note() -> str:
     return (f"Re-measured on {m['stamp']['date'][:10]} (`PYTHONPATH=. python benchmarks/m1_ratio.py`: the "
             f"settings below, interleaved, median of 5): ancf_jax {m['ancf_run_s']:.3f} s against Exudyn "
             f"{m['exudyn_run_s']:.3f} s, ratio {m['ratio']:.2f}.\n\n")
+
+
+def _loop_kernels() -> dict | None:
+    path = Path(__file__).parent / "results" / "loop_kernels.json"
+    return json.loads(path.read_text()) if path.exists() else None
+
+
+def _loop_kernel_target_note() -> str:
+    """The M1 ratio with loop kernels (benchmarks/loop_kernels.py), for the target row."""
+    m = _loop_kernels()
+    if not m or "m1_ratio_loop_kernels" not in m or m.get("quick"):
+        return ""
+    row = m["rows"][0]
+    return (f". **With loop kernels** (opt-in `ANCF_JAX_LOOP_KERNELS=1`, Loop kernels below): "
+            f"**{m['m1_ratio_loop_kernels']:.2f}** (met; default {m['m1_ratio_default']:.2f} in the same run), "
+            f"at a first-call compile of {row['loop_kernels']['compile_s']:.1f} s instead of "
+            f"{row['default']['compile_s']:.1f} s, so off by default")
+
+
+def sec_loop_kernels(m) -> str:
+    out = ["### Loop kernels (opt-in)\n\n",
+           "`ANCF_JAX_LOOP_KERNELS=1` (ancf_jax/_xla.py) lets XLA:CPU compile a small model's Newton "
+           "loop into one kernel instead of dispatching a kernel per fusion; small LUs then avoid LAPACK. "
+           "Fresh processes, no compilation cache, each model at single_run's ancf_jax settings, output at "
+           f"every step, median of {m['reps']} runs:\n\n"]
+    rows = []
+    for r in m["rows"]:
+        d, k = r["default"], r["loop_kernels"]
+        rows.append([f"{r['model']} ({r['elements']} el., 0–{r['t_end']:g} s)", f"{d['run_s']:.4f}",
+                     f"{k['run_s']:.4f}", f"{r['run_ratio']:.2f}", f"{d['compile_s']:.2f}", f"{k['compile_s']:.2f}",
+                     f"{r['max_difference_m']:.1e}"])
+    out.append(table(["model", "run, default [s]", "run, loop kernels [s]", "run ratio", "compile, default [s]",
+                      "compile, loop kernels [s]", "max output difference [m]"], rows) + "\n")
+    if "exudyn_m1" in m:
+        e = m["exudyn_m1"]
+        out.append(f"Exudyn M1 at its chosen settings (h = {e['dt']:g} s), median of {len(e['runs_s'])} runs "
+                   f"before and after the children: {e['run_s']:.4f} s; ancf_jax / Exudyn: default "
+                   f"{m['m1_ratio_default']:.3f}, loop kernels {m['m1_ratio_loop_kernels']:.3f}.\n\n")
+    out.append(f"_Command: `python -m benchmarks.loop_kernels`; {m['stamp']['date']}._\n")
+    return "".join(out)
 
 
 def sec_single(d):
@@ -698,6 +740,8 @@ def render(results: Path | None = None, out: Path | None = None) -> Path:
             parts.append(renderers[name](data[name]) + "\n")
         if name == "single_run" and PROFILE in data:
             parts.append(sec_step_profile(data[PROFILE]) + "\n")
+        if name == "single_run" and _loop_kernels():
+            parts.append(sec_loop_kernels(_loop_kernels()) + "\n")
         if name == "batch":
             parts += [sec_batch_gpu(data[g], data.get("batch")) + "\n" for g in EXTRA if g in data]
     out.write_text("".join(parts))
