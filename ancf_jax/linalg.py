@@ -335,6 +335,11 @@ def solve_chain(f: ChainFactor, r):
 ELEMENTWISE_LU = 24
 
 
+def _elementwise(n: int) -> bool:
+    """Whether an n×n LU is factored and solved elementwise (:func:`lu_factor`)."""
+    return n <= ELEMENTWISE_LU and _xla.loop_kernels()
+
+
 def lu_factor(a):
     """LU factors with partial pivoting of a square matrix: ``(lu, permutation)``.
 
@@ -347,7 +352,7 @@ def lu_factor(a):
     (:func:`ancf_jax._xla.loop_kernels`) matrices up to :data:`ELEMENTWISE_LU` are
     factored by :func:`lu_factor_elementwise`, as a LAPACK call keeps the loop around
     it (the Newton iteration) from becoming one kernel."""
-    if a.shape[-1] <= ELEMENTWISE_LU and _xla.loop_kernels():
+    if _elementwise(a.shape[-1]):
         return lu_factor_elementwise(a)
     lu, _, perm = jax.lax.linalg.lu(a)
     return lu, perm
@@ -358,7 +363,7 @@ def lu_solve(factors, b):
     lu, perm = factors
     vec = b.ndim == 1
     x = jnp.reshape(b, (b.shape[0], -1))[perm]
-    if lu.shape[-1] <= ELEMENTWISE_LU and _xla.loop_kernels():
+    if _elementwise(lu.shape[-1]):
         x = triangular_solve_elementwise(lu, x)
     else:
         x = jax.lax.linalg.triangular_solve(lu, x, left_side=True, lower=True, unit_diagonal=True)

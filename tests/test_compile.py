@@ -101,7 +101,9 @@ def test_loop_kernels_give_the_default_run_without_lapack_in_the_step():
     from ancf_jax.models.m1 import m1_model
     root = str(Path(__file__).resolve().parents[1])
     env = dict(os.environ, ANCF_JAX_LOOP_KERNELS="1")
-    env["XLA_FLAGS"] = env.get("XLA_FLAGS", "").replace("xla_backend_extra_options", "")  # ours, not a user's
+    # the suite's own flags, without any extra options of the caller's (ours must be added)
+    env["XLA_FLAGS"] = " ".join(f for f in env.get("XLA_FLAGS", "").split()
+                                if not f.startswith("--xla_backend_extra_options"))
     out = subprocess.run([sys.executable, "-c", LOOP_KERNEL_CODE.format(root=root)], env=env, cwd=root,
                          capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr[-3000:]
