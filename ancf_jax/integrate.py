@@ -53,7 +53,7 @@ import numpy as np
 from .errors import ModelError
 from .failures import Failure
 from .forces import has_kinks, has_node_crossings, kink_values, node_crossing_values
-from .integrators.base import AbstractIntegrator, Carry, StepInfo
+from .integrators.base import AbstractIntegrator, Carry, StepInfo, select_carry
 from ._control import run_if
 from .joints import SlidingJoint
 from .system import State, System
@@ -407,8 +407,8 @@ def _step_with_retries(system, integrator, carry, h, context, options):
         dt = jnp.minimum(h_try, h - done)
         new, info = integrator.step(system, c, dt, context)
         good = step_rejected(system, c, new, info.converged, options) == Failure.OK
-        first = jax.tree.map(lambda a, b: jnp.where(attempt == 0, a, b), new, first)
-        c = jax.tree.map(lambda a, b: jnp.where(good, a, b), new, c)
+        first = select_carry(attempt == 0, new, first)
+        c = select_carry(good, new, c)
         done = jnp.where(good, done + dt, done)
         h_next = jnp.where(good, jnp.minimum(2.0 * h_try, h), 0.5 * h_try)
         ok = good | (0.5 * h_try >= h_min * (1.0 - 1e-12))
@@ -419,7 +419,7 @@ def _step_with_retries(system, integrator, carry, h, context, options):
         cond, body, (carry, carry, zero, h + zero, jnp.zeros((), jnp.int32), jnp.ones((), bool),
                      jnp.zeros((), jnp.int32)))
     completed = done >= h * (1.0 - 1e-12)
-    out = jax.tree.map(lambda a, b: jnp.where(completed, a, b), c, first)
+    out = select_carry(completed, c, first)
     return out, StepInfo(iters, completed)
 
 
@@ -465,7 +465,7 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
             conv = jnp.where(crossed, extra[1], conv)
         code = step_status(system, loop.carry, new2, conv, options)
         ok = active & (code == Failure.OK)
-        carry = jax.tree.map(lambda a, b: jnp.where(ok, a, b), new2, loop.carry)
+        carry = select_carry(ok, new2, loop.carry)
         nl = LoopState(carry, jnp.where(active, code, loop.status),
                        jnp.where(ok | ~active, loop.fail_time, new2.t))
         it = jnp.where(active, it, 0)

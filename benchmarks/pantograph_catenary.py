@@ -6,8 +6,10 @@
    times (statics, time stepping).
 2. ``convergence``: the reduced catenary of tests/test_catenary.py (3 spans of 10 m,
    span 2 evaluated) under joint refinement of element length and step (1, 0.5,
-   0.25 m against 0.125 m; steps 1 ms × element length / 1 m), and the shipped
-   model's setting (0.5 m, 1 ms) against the same reference.
+   0.25 m against 0.125 m; steps 1 ms × element length / 1 m), and the step alone at
+   the shipped 0.5 m (1, 2, 4 ms) against the same reference.
+   ``tolerance``: the Newton tolerance at the shipped mesh and step (0.5 m, 2 ms):
+   the contact force's and the statistics' changes from 1e-10 m, Newton iterations.
 3. ``full``: the shipped scenario (10 spans, 2,400 elements) at 250 and 300 km/h, its
    statistics against the EN 50318:2002 ranges, wall time and real-time factor.
 4. ``batch``: the reduced catenary at 8 speeds (150–350 km/h) in one vmapped run
@@ -89,22 +91,55 @@ def reuse(spans: int = 2, reps: int = 5) -> dict:
     return dict(spans=spans, coordinates=system.n_coordinates, steps=200, runs=rows)
 
 
+def _rms_against(r, ref) -> float:
+    """RMS difference [N] of the filtered contact force of run ``r`` from ``ref``'s over
+    the evaluated window, at ``ref``'s samples (``r``'s by a cubic spline in x where its
+    output step is coarser: the 20 Hz force sampled at ≥ 250 Hz)."""
+    from scipy.interpolate import CubicSpline
+    sel = (ref.x >= ref.window[0]) & (ref.x <= ref.window[1])
+    f = r.filtered[sel] if len(r.x) == len(ref.x) else CubicSpline(r.x, r.filtered)(ref.x[sel])
+    return float(np.sqrt(np.mean((f - ref.filtered[sel]) ** 2)))
+
+
 def convergence() -> dict:
-    levels = [(1.0, 1e-3), (0.5, 5e-4), (0.25, 2.5e-4), (0.5, 1e-3), (0.125, 1.25e-4)]
+    # joint refinement, then the step alone at the shipped 0.5 m (outputs at the step
+    # where it is coarser than 1 ms: outputs are taken at steps)
+    levels = [(1.0, 1e-3), (0.5, 5e-4), (0.25, 2.5e-4), (0.5, 1e-3), (0.5, 2e-3), (0.5, 4e-3), (0.125, 1.25e-4)]
     runs = {}
     for el, dt in levels:
         r = run_pantograph_catenary(CatenaryDesign(element_length=el, **RUN), speed_kmh=250, dt=dt,
-                                    output_dt=1e-3, pad_to=240, spans=(2, 2))
+                                    output_dt=max(dt, 1e-3), pad_to=240, spans=(2, 2))
         runs[(el, dt)] = r
         print(el, dt, {k: v for k, v in r.statistics.items() if k.endswith("_N")}, flush=True)
     ref = runs[(0.125, 1.25e-4)]
-    sel = (ref.x >= ref.window[0]) & (ref.x <= ref.window[1])
     out = []
     for (el, dt), r in runs.items():
-        rms = float(np.sqrt(np.mean((r.filtered[sel] - ref.filtered[sel]) ** 2)))
-        out.append(dict(element_length=el, dt=dt, rms_error_N=rms, **{k: r.statistics[k] for k in (
+        out.append(dict(element_length=el, dt=dt, rms_error_N=_rms_against(r, ref), **{k: r.statistics[k] for k in (
             "mean_N", "std_N", "max_N", "min_N", "uplift_support_mm")}))
     return dict(reference=dict(element_length=0.125, dt=1.25e-4), levels=out)
+
+
+def tolerance() -> dict:
+    """The Newton tolerance (on the position correction [m]) at the shipped mesh and
+    step, factors carried across steps as the scenario does: how far the contact force
+    and the statistics move from the run at 1e-10 m, against the discretization error
+    (:func:`convergence`), and the Newton iterations per step."""
+    from ancf_jax.integrators.generalized_alpha import AcrossSteps, GeneralizedAlpha
+    from ancf_jax.newton import ModifiedNewton
+    runs = {}
+    for tol in (1e-10, 1e-8, 1e-7, 1e-6):
+        solver = GeneralizedAlpha(root_finder=ModifiedNewton(tolerance=tol), factor_reuse=AcrossSteps(16))
+        runs[tol] = run_pantograph_catenary(CatenaryDesign(element_length=0.5, **RUN), speed_kmh=250, dt=2e-3,
+                                            output_dt=2e-3, pad_to=240, spans=(2, 2), solver=solver)
+    ref = runs[1e-10]
+    out = []
+    for tol, r in runs.items():
+        out.append(dict(tolerance_m=tol, newton_per_step=float(np.mean(r.results.iterations)),
+                        max_force_difference_N=float(np.max(np.abs(r.force - ref.force))),
+                        max_statistic_difference_N=max(abs(r.statistics[k] - ref.statistics[k]) for k in (
+                            "mean_N", "std_N", "stat_max_N", "stat_min_N", "max_N", "min_N"))))
+        print(out[-1], flush=True)
+    return dict(element_length=0.5, dt=2e-3, levels=out)
 
 
 def full() -> dict:
@@ -149,7 +184,7 @@ def batch() -> dict:
                 single_compile_s=singles[0].compile_time_s, max_q_difference_m=agree)
 
 
-PARTS = dict(scaling=scaling, convergence=convergence, full=full, batch=batch, reuse=reuse)
+PARTS = dict(scaling=scaling, convergence=convergence, tolerance=tolerance, full=full, batch=batch, reuse=reuse)
 
 
 def markdown(data: dict) -> str:
@@ -167,6 +202,13 @@ def markdown(data: dict) -> str:
             [[r["element_length"], r["dt"], f"{r['rms_error_N']:.3f}", f"{r['mean_N']:.2f}", f"{r['std_N']:.2f}",
               f"{r['max_N']:.2f}", f"{r['min_N']:.2f}", f"{r['uplift_support_mm']:.2f}"]
              for r in data["convergence"]["levels"]]))
+    if "tolerance" in data:
+        u = data["tolerance"]
+        md.append(f"Newton tolerance ({u['element_length']} m, h = {u['dt'] * 1e3:g} ms, factors carried across "
+                  f"steps), against the run at 1e-10 m:\n\n" + table(
+                      ["tolerance [m]", "Newton/step", "max |ΔF| [N]", "max Δ statistic [N]"],
+                      [[f"{r['tolerance_m']:g}", f"{r['newton_per_step']:.2f}", f"{r['max_force_difference_N']:.1e}",
+                        f"{r['max_statistic_difference_N']:.1e}"] for r in u["levels"]]))
     if "full" in data:
         rows = []
         for r in data["full"]["runs"]:

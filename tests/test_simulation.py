@@ -207,3 +207,26 @@ def test_gradient_rk4_h1_rayleigh():
     fd = central_differences(f, p0, (1e-4, 1e-4))
     assert np.all(np.abs(np.asarray(grad)) > 0)
     np.testing.assert_allclose(np.asarray(grad), fd, rtol=1e-6)
+
+
+def test_time_grid_never_shortens_the_step_asked_for():
+    """Outputs end at t_end and every step is at most dt, with the fewest steps that
+    allow it: the output interval is shortened to t_end / n (never lengthened, which
+    would take one more substep per interval: a 6.0408 s run at dt = 2 ms, output at
+    every step, ran at 1 ms before 2026-12-06)."""
+    import math
+    from ancf_jax.simulation import time_grid
+    rng = np.random.default_rng(6)
+    cases = [(6.0408, 2e-3, None), (1.0002, 2e-3, 1e-2), (2.0, 1.25e-3, 0.01), (0.3, 1e-3, None),
+             (1e-3, 2e-3, None)] + [(float(rng.uniform(0.01, 5)), float(rng.uniform(1e-4, 5e-3)), None)
+                                     for _ in range(50)]
+    for t_end, dt, out in cases:
+        out_asked = dt if out is None else out
+        n, sub, h, out_dt = time_grid(t_end, dt, out)
+        assert h <= dt * (1 + 1e-12) and out_dt <= max(out_asked, t_end) * (1 + 1e-12)
+        assert n * out_dt == pytest.approx(t_end, rel=1e-12) and sub * h == pytest.approx(out_dt, rel=1e-12)
+        # the fewest substeps that keep h <= dt, and the fewest intervals that keep out_dt <= the asked one
+        assert sub == max(1, math.ceil(out_dt / dt * (1 - 1e-9)))
+        assert n == max(1, math.ceil(t_end / out_asked * (1 - 1e-9)))
+        if out is None:
+            assert sub == 1 and n == max(1, math.ceil(t_end / dt * (1 - 1e-9)))

@@ -8,7 +8,10 @@ from __future__ import annotations
 import abc
 from typing import Any
 
+import dataclasses
+
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 
 
@@ -38,6 +41,35 @@ class Carry(eqx.Module):
     work: jnp.ndarray
     power: jnp.ndarray
     memory: Any = None
+
+
+class AbstractMemory(eqx.Module):
+    """What an integrator keeps of its solver across steps (:attr:`Carry.memory`) when
+    it is large: kept by :meth:`select` without copying, where the run loop selects
+    between a step's result and the state before it."""
+
+    @abc.abstractmethod
+    def select(self, keep, old: "AbstractMemory") -> "AbstractMemory":
+        """The memory after a step whose result is kept where ``keep`` (bool, batched
+        under vmap) holds and discarded otherwise; ``self`` is the step's, ``old`` the
+        one before it."""
+
+
+def select_carry(keep, new: Carry, old: Carry) -> Carry:
+    """``new`` where ``keep`` holds, else ``old`` (a step kept or discarded): every
+    field by ``jnp.where``, an :class:`AbstractMemory` by its :meth:`~AbstractMemory.select`.
+
+    Why the memory is apart: a select reads both operands and writes a third array, and
+    generalized-α's carried Newton-matrix factors are megabytes (the 10-span
+    pantograph–catenary: ~10 MB); the run loop selects carries four times per step, which
+    cost 1.9 of its 18.8 ms per step (``HACK`` measurement in the session of 2026-12-06:
+    ``benchmarks.pantograph_catenary``'s 10-span model, 0.2 s, with ``reuse_factors = 16``)."""
+    memory = new.memory
+    if not isinstance(memory, AbstractMemory):
+        return jax.tree.map(lambda a, b: jnp.where(keep, a, b), new, old)
+    rest = jax.tree.map(lambda a, b: jnp.where(keep, a, b), dataclasses.replace(new, memory=None),
+                        dataclasses.replace(old, memory=None))
+    return dataclasses.replace(rest, memory=memory.select(keep, old.memory))
 
 
 class StepInfo(eqx.Module):

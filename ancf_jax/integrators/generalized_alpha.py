@@ -117,7 +117,7 @@ import jax.numpy as jnp
 from .. import dae
 from ..newton import ModifiedNewton
 from ..validation import check_count
-from .base import AbstractIntegrator, Carry, StepInfo
+from .base import AbstractIntegrator, AbstractMemory, Carry, StepInfo
 
 
 #: iterative-refinement steps of the tangent solves of derivatives where the Newton
@@ -168,13 +168,14 @@ class VelocityLevel(AbstractConstraintLevel):
 CONSTRAINT_LEVELS = {3: PositionLevel, 2: VelocityLevel}
 
 
-class FactorMemory(eqx.Module):
+class FactorMemory(AbstractMemory):
     """The Newton-matrix factors a step leaves to the next (:class:`AcrossSteps`),
     held in :attr:`~ancf_jax.integrators.base.Carry.memory`.
 
     Attributes:
         factors: factors of the Newton matrix (``linear_solver.init``'s pytree).
-        h: the step they were made for [s] (β', γ' depend on it; NaN: none yet).
+        h: the step they were made for [s] (β', γ' depend on it; NaN: none yet, or
+            invalid).
         age: steps that have used them, the one that made them included (int).
         factorizations: factorizations of the Newton matrix since the run began (int;
             a diagnostic).
@@ -184,6 +185,16 @@ class FactorMemory(eqx.Module):
     h: jnp.ndarray
     age: jnp.ndarray
     factorizations: jnp.ndarray
+
+    def select(self, keep, old):
+        """The factors of a discarded step are kept as well, but marked invalid (h NaN:
+        the next step factors anew at its first iterate), so that the megabytes of
+        factors are never copied by a select (:func:`~ancf_jax.integrators.base.select_carry`).
+        A discarded step is retried with a smaller step, or the run stops, and either
+        refactored before: the solution is the same."""
+        return FactorMemory(self.factors, jnp.where(keep, self.h, jnp.nan),
+                            jnp.where(keep, self.age, old.age),
+                            jnp.where(keep, self.factorizations, old.factorizations))
 
 
 class AbstractFactorReuse(eqx.Module):

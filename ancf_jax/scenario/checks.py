@@ -16,6 +16,7 @@ import numpy as np
 
 from . import schema as S
 from ..errors import ModelError
+from ..simulation import time_grid
 from ..validation import coincide_tolerance
 from .errors import Invalid
 from .types import TimeFunctionSpec
@@ -560,29 +561,30 @@ class Checker:
             raise Invalid(("outputs", "dt"), f"{out:g} s is longer than the run, solver.t_end = {sol.t_end:g} s",
                           f"a number in {sol.dt:g} .. {sol.t_end:g} [s]")
 
+    def _time_grid(self):
+        """:func:`ancf_jax.simulation.time_grid` of the run (an output interval shorter
+        than the step, refused by :meth:`solver`, taken as the step here)."""
+        sol, out = self.spec.solver, self.spec.outputs.dt
+        return time_grid(sol.t_end, sol.dt, None if out is None else max(out, sol.dt))
+
     def output_times(self) -> np.ndarray:
         """The run's output times [s] (t = 0, every outputs.dt, t_end), as
         :func:`ancf_jax.simulation.time_grid` places them; at most
         :data:`MAX_CHECKED_TIMES` of them (evenly spread) on a longer grid."""
-        sol = self.spec.solver
-        step = self.spec.outputs.dt if self.spec.outputs.dt is not None else sol.dt
-        n = max(1, int(round(sol.t_end / step)))
+        n, _, _, out_dt = self._time_grid()
         if n + 1 > MAX_CHECKED_TIMES:
             return np.linspace(0.0, sol.t_end, MAX_CHECKED_TIMES)
-        return sol.t_end / n * np.arange(n + 1)
+        return out_dt * np.arange(n + 1)
 
     def step_times(self) -> np.ndarray:
         """The times [s] of the run's fixed steps (every h <= solver.dt between output
         times), as :func:`ancf_jax.simulation.time_grid` places them; at most
         :data:`MAX_CHECKED_STEPS` of them (evenly spread) on a longer grid."""
-        sol = self.spec.solver
-        step = self.spec.outputs.dt if self.spec.outputs.dt is not None else sol.dt
-        n = max(1, int(round(sol.t_end / step)))
-        sub = max(1, int(np.ceil(sol.t_end / n / sol.dt * (1 - 1e-9))))
+        n, sub, h, _ = self._time_grid()
         steps = n * sub
         if steps + 1 > MAX_CHECKED_STEPS:
             return np.linspace(0.0, sol.t_end, MAX_CHECKED_STEPS)
-        return sol.t_end / n / sub * np.arange(steps + 1)
+        return h * np.arange(steps + 1)
 
     def time_functions(self):
         """Every expression finite at the time steps, the output times and statics.time

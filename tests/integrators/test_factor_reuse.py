@@ -150,3 +150,34 @@ def test_max_age_must_be_a_positive_integer():
     for bad in (0, -1, 1.5, True):
         with pytest.raises(ModelError, match="max_age must be an integer >= 1"):
             AcrossSteps(bad)
+
+
+def test_a_discarded_step_keeps_its_factors_marked_invalid(h1):
+    """``select_carry`` (the run loop's choice between a step's result and the state
+    before it) takes every field of the kept carry, except that the factor memory is
+    the newest one whichever is kept (never copied by a select), marked invalid (h NaN,
+    so the next step factors anew) when the step is discarded; its age and count are
+    those of the kept carry."""
+    from ancf_jax.integrators.base import select_carry
+    system, state = h1
+    solver = GeneralizedAlpha(factor_reuse=AcrossSteps(4))
+    context = solver.prepare(system)
+    old = solver.init(system, state, context)
+    new, _ = solver.step(system, old, H, context)
+    assert int(new.memory.factorizations) == 1 and float(new.memory.h) == H
+    for keep, kept in ((True, new), (False, old)):
+        c = select_carry(jnp.asarray(keep), new, old)
+        for a, b in zip(jax.tree.leaves(eqx.tree_at(lambda x: x.memory, c, None)),
+                        jax.tree.leaves(eqx.tree_at(lambda x: x.memory, kept, None))):
+            np.testing.assert_array_equal(a, b)
+        assert all(np.array_equal(a, b) for a, b in zip(jax.tree.leaves(c.memory.factors),
+                                                         jax.tree.leaves(new.memory.factors)))
+        assert int(c.memory.age) == int(kept.memory.age)
+        assert int(c.memory.factorizations) == int(kept.memory.factorizations)
+        assert (float(c.memory.h) == H) if keep else np.isnan(c.memory.h)
+    # a carry without memory: every field selected
+    plain = GeneralizedAlpha()
+    p_old = plain.init(system, state, context)
+    p_new, _ = plain.step(system, p_old, H, context)
+    c = select_carry(jnp.asarray(False), p_new, p_old)
+    assert c.memory is None and np.array_equal(c.q, p_old.q)
