@@ -12,6 +12,7 @@
    the contact force's and the statistics' changes from 1e-10 m, Newton iterations.
 3. ``full``: the shipped scenario (10 spans, 2,400 elements) at 250 and 300 km/h, its
    statistics against the EN 50318:2002 ranges, wall time and real-time factor.
+   ``full_steps``: the shipped scenario at 250 km/h at 0.5, 1 and 2 ms.
 4. ``batch``: the reduced catenary at 8 speeds (150–350 km/h) in one vmapped run
    against 8 single runs (same program and step count).
 5. ``reuse``: the 2-span model of ``scaling`` with the Newton matrix factored at every
@@ -164,6 +165,30 @@ def full() -> dict:
     return dict(runs=out)
 
 
+def full_steps() -> dict:
+    """The shipped scenario at 250 km/h at steps of 0.5, 1 and 2 ms (outputs at every
+    step, its other settings as shipped): the statistics' changes against the 0.5 ms
+    run, where the contact opens and closes (the reduced catenary of
+    :func:`convergence` never loses contact) and the wall time."""
+    from ancf_jax.scenario import load_scenario
+    from ancf_jax.scenario.build import pantograph_start
+    runs = {}
+    for dt in (5e-4, 1e-3, 2e-3):
+        sc = load_scenario("pantograph_catenary", ["pantograph.speed_kmh=250", f"solver.dt={dt}", f"outputs.dt={dt}"])
+        system, state = sc.build()
+        r = simulate(system, state, **{**sc.solver.simulate_kwargs(), "progress": False})
+        p = sc.spec.pantograph
+        run = analyse_pantograph_run(r, sc.spec.catenary.design(), speed_kmh=250.0, start=pantograph_start(sc.spec),
+                                     spans=p.spans, cutoff=p.cutoff)
+        runs[dt] = (dict(run.statistics), r.wall_time_s, float(r.t[-1]))
+        print(dt, runs[dt], flush=True)
+    ref = runs[5e-4][0]
+    keys = ("mean_N", "std_N", "stat_max_N", "stat_min_N", "max_N", "min_N", "uplift_support_mm", "contact_loss_pct")
+    return dict(speed_kmh=250.0, reference_dt=5e-4, runs=[dict(
+        dt=dt, wall_s=w, real_time_factor=w / t, statistics={k: s[k] for k in keys},
+        difference={k: s[k] - ref[k] for k in keys}) for dt, (s, w, t) in runs.items()])
+
+
 def batch() -> dict:
     speeds = np.linspace(150, 350, 8)
     systems, states = [], []
@@ -184,7 +209,8 @@ def batch() -> dict:
                 single_compile_s=singles[0].compile_time_s, max_q_difference_m=agree)
 
 
-PARTS = dict(scaling=scaling, convergence=convergence, tolerance=tolerance, full=full, batch=batch, reuse=reuse)
+PARTS = dict(scaling=scaling, convergence=convergence, tolerance=tolerance, full=full, full_steps=full_steps,
+             batch=batch, reuse=reuse)
 
 
 def markdown(data: dict) -> str:
@@ -221,6 +247,15 @@ def markdown(data: dict) -> str:
                       f"- {r['statistics']['speed_kmh']:g} km/h: {r['steps']} steps, wall {r['wall_s']:.0f} s, "
                       f"real-time factor {r['real_time_factor']:.1f}, compile {r['compile_s']:.0f} s, build + "
                       f"statics {r['build_and_statics_s']:.0f} s" for r in data["full"]["runs"]))
+    if "full_steps" in data:
+        u = data["full_steps"]
+        keys = list(u["runs"][0]["statistics"])
+        md.append(f"Shipped model at {u['speed_kmh']:g} km/h by step, differences from the "
+                  f"{u['reference_dt'] * 1e3:g} ms run:\n\n" + table(
+                      ["h [ms]", "real-time factor"] + keys,
+                      [[f"{r['dt'] * 1e3:g}", f"{r['real_time_factor']:.1f}"]
+                       + [f"{r['statistics'][k]:.2f}" if r["dt"] == u["reference_dt"] else f"{r['difference'][k]:+.2f}"
+                          for k in keys] for r in u["runs"]]))
     if "reuse" in data:
         u = data["reuse"]
         md.append(f"Newton-matrix factors per step or carried across steps ({u['spans']} spans, "
