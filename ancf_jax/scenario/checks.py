@@ -573,7 +573,7 @@ class Checker:
         :data:`MAX_CHECKED_TIMES` of them (evenly spread) on a longer grid."""
         n, _, _, out_dt = self._time_grid()
         if n + 1 > MAX_CHECKED_TIMES:
-            return np.linspace(0.0, sol.t_end, MAX_CHECKED_TIMES)
+            return np.linspace(0.0, self.spec.solver.t_end, MAX_CHECKED_TIMES)
         return out_dt * np.arange(n + 1)
 
     def step_times(self) -> np.ndarray:
@@ -583,7 +583,7 @@ class Checker:
         n, sub, h, _ = self._time_grid()
         steps = n * sub
         if steps + 1 > MAX_CHECKED_STEPS:
-            return np.linspace(0.0, sol.t_end, MAX_CHECKED_STEPS)
+            return np.linspace(0.0, self.spec.solver.t_end, MAX_CHECKED_STEPS)
         return h * np.arange(steps + 1)
 
     def time_functions(self):
