@@ -190,8 +190,9 @@ class FactorMemory(AbstractMemory):
         """The factors of a discarded step are kept as well, but marked invalid (h NaN:
         the next step factors anew at its first iterate), so that the megabytes of
         factors are never copied by a select (:func:`~ancf_jax.integrators.base.select_carry`).
-        A discarded step is retried with a smaller step, or the run stops, and either
-        refactored before: the solution is the same."""
+        A discarded step is retried with a smaller step (which refactored before as
+        well: the same solution), or the run stops or ends (a checkpoint then continues
+        to the Newton tolerance, not bit for bit: :class:`~ancf_jax.integrate.Checkpoint`)."""
         return FactorMemory(self.factors, jnp.where(keep, self.h, jnp.nan),
                             jnp.where(keep, self.age, old.age),
                             jnp.where(keep, self.factorizations, old.factorizations))
