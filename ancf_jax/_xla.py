@@ -26,8 +26,9 @@ runs every step, stays optimized: at level 0 M1's steps ran 4.8× slower.)
 Loop kernels (opt-in: ``ANCF_JAX_LOOP_KERNELS=1``). XLA:CPU runs a program as a
 sequence of small compiled kernels ("thunks"), one per fusion, each dispatched on its
 own; the step of a small model is hundreds of them, a few tens of nanoseconds each, and
-that dispatch is most of its cost (M1, 6 elements: ~20 of 35 µs per step,
-``python -m benchmarks.step_profile``). XLA can instead compile a while loop whose
+that dispatch is most of its cost (M1, 6 elements: the Newton matrix and its
+factorization, 21 of 40 µs per step, ``python -m benchmarks.step_profile``, are a few
+dozen tiny operations each; the loop kernels below halve the step). XLA can instead compile a while loop whose
 instructions touch at most ``xla_cpu_small_while_loop_byte_threshold`` bytes into one
 kernel (its small-while-loop hoisting pass; XLA's default threshold is 1,024 bytes). With the
 switch on, ancf_jax raises it to :data:`LOOP_KERNEL_BYTES`, so that a small model's

@@ -143,21 +143,26 @@ def tolerance() -> dict:
     return dict(element_length=0.5, dt=2e-3, levels=out)
 
 
-def full() -> dict:
+def _shipped_run(speed_kmh: float, *overrides: str):
+    """The shipped scenario at ``speed_kmh`` with ``--set`` style ``overrides``, as the
+    CLI runs it: (statistics, results, build + statics time [s])."""
     from ancf_jax.scenario import load_scenario
     from ancf_jax.scenario.build import pantograph_start
+    sc = load_scenario("pantograph_catenary", [f"pantograph.speed_kmh={speed_kmh}", *overrides])
+    t0 = time.perf_counter()
+    system, state = sc.build()
+    build_s = time.perf_counter() - t0
+    r = simulate(system, state, **{**sc.solver.simulate_kwargs(), "progress": False})
+    p = sc.spec.pantograph
+    run = analyse_pantograph_run(r, sc.spec.catenary.design(), speed_kmh=speed_kmh, start=pantograph_start(sc.spec),
+                                 spans=p.spans, cutoff=p.cutoff)
+    return dict(run.statistics), r, build_s
+
+
+def full() -> dict:
     out = []
     for v in (250.0, 300.0):
-        sc = load_scenario("pantograph_catenary", [f"pantograph.speed_kmh={v}"])
-        t0 = time.perf_counter()
-        system, state = sc.build()
-        build_s = time.perf_counter() - t0
-        kw = sc.solver.simulate_kwargs()
-        r = simulate(system, state, **{**kw, "progress": False})
-        p = sc.spec.pantograph
-        run = analyse_pantograph_run(r, sc.spec.catenary.design(), speed_kmh=v, start=pantograph_start(sc.spec),
-                                     spans=p.spans, cutoff=p.cutoff)
-        stats = dict(run.statistics)
+        stats, r, build_s = _shipped_run(v)
         out.append(dict(statistics=stats, en50318_2002=against_ranges(stats), build_and_statics_s=build_s,
                         compile_s=r.compile_time_s, wall_s=r.wall_time_s, simulated_s=float(r.t[-1]),
                         real_time_factor=r.wall_time_s / float(r.t[-1]), steps=int(r.info["steps"])))
@@ -170,17 +175,10 @@ def full_steps() -> dict:
     step, its other settings as shipped): the statistics' changes against the 0.5 ms
     run, where the contact opens and closes (the reduced catenary of
     :func:`convergence` never loses contact) and the wall time."""
-    from ancf_jax.scenario import load_scenario
-    from ancf_jax.scenario.build import pantograph_start
     runs = {}
     for dt in (5e-4, 1e-3, 2e-3):
-        sc = load_scenario("pantograph_catenary", ["pantograph.speed_kmh=250", f"solver.dt={dt}", f"outputs.dt={dt}"])
-        system, state = sc.build()
-        r = simulate(system, state, **{**sc.solver.simulate_kwargs(), "progress": False})
-        p = sc.spec.pantograph
-        run = analyse_pantograph_run(r, sc.spec.catenary.design(), speed_kmh=250.0, start=pantograph_start(sc.spec),
-                                     spans=p.spans, cutoff=p.cutoff)
-        runs[dt] = (dict(run.statistics), r.wall_time_s, float(r.t[-1]))
+        stats, r, _ = _shipped_run(250.0, f"solver.dt={dt}", f"outputs.dt={dt}")
+        runs[dt] = (stats, r.wall_time_s, float(r.t[-1]))
         print(dt, runs[dt], flush=True)
     ref = runs[5e-4][0]
     keys = ("mean_N", "std_N", "stat_max_N", "stat_min_N", "max_N", "min_N", "uplift_support_mm", "contact_loss_pct")
