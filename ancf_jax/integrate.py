@@ -546,7 +546,10 @@ def initial_loop(system: System, integrator: AbstractIntegrator, state: State | 
         carry = integrator.resume(system, state.carry, context)
     else:
         carry = integrator.init(system, state, context)
-    return LoopState(carry, jnp.asarray(Failure.OK), jnp.asarray(jnp.nan))
+    # strongly typed scalars, as the loop returns them: a weakly typed ``jnp.asarray(nan)``
+    # made a jitted chunk called with the initial loop and then with its own output
+    # trace and compile twice (tests/test_integrate.py::test_second_chunk_reuses_the_program)
+    return LoopState(carry, jnp.asarray(Failure.OK), jnp.full((), jnp.nan, jnp.result_type(carry.t)))
 
 
 def segment_of(loop: LoopState) -> Segment:  # noqa: D401

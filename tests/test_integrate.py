@@ -244,3 +244,29 @@ def test_a_sliding_joint_moving_more_than_half_an_element_is_a_failed_step():
         q1[i] += ds * lengths[0]
         moved_state = Carry(state.t, q1, state.v, q1, q1, lam, z, z)
         assert int(step_rejected(system, single, moved_state, np.array(True), RunOptions())) == expected
+
+
+# ---------------------------------------------------------------------------- chunks
+@pytest.mark.parametrize("name", ["generalized-alpha", "rk4", "explicit-euler"])
+def test_second_chunk_reuses_the_program(name):
+    """The loop state a chunk returns has the types of the one it was given (dtype,
+    shape and weak type of every leaf), so a jitted chunk called again with its own
+    output reuses its compiled program. A weakly typed initial ``fail_time`` made every
+    chunked test run (tests/dynamics.py) trace and compile its chunk twice (8 s for the
+    contact bounce of tests/test_moving_loads.py). Traced only (``jax.eval_shape``)."""
+    from ancf_jax.integrate import initial_loop, integrate_fixed
+    from ancf_jax.simulation import make_solver
+
+    from .dynamics import h1_model
+
+    system, state = h1_model(2).build()
+    solver = make_solver(name)
+    context = solver.prepare(system)
+    loop = jax.jit(lambda: initial_loop(system, solver, state, context))()
+    out, _ = jax.eval_shape(lambda lp: integrate_fixed(system, solver, lp, context, 1e-3, n_intervals=1,
+                                                       substeps=1), loop)
+
+    def types(tree):
+        return [(jax.typeof(x).shape, jax.typeof(x).dtype, jax.typeof(x).weak_type) for x in jax.tree.leaves(tree)]
+
+    assert types(out) == types(loop)
