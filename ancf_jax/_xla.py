@@ -13,6 +13,15 @@ not set (a flag already named in ``XLA_FLAGS``, with any value, is left as it is
   of 64 M1 variants, first call 14.1 s → 10.5 s, run 3.1 s → 3.0 s; M2 (24 elements)
   first call 7.7 s → 5.7 s, run unchanged. Results are the same to rounding (other
   instruction orders: the 2 s M1 run differs by at most 9.5e-14 m in q).
+  On the largest program of the test suite (the located-contact chunk of
+  ``tests/test_moving_loads.py``, XLA compile alone, fresh processes, 2026-12-06) it
+  took the compile from 11.9 to 8.3–9.5 CPU s. Flags tried with it that changed
+  nothing beyond the ±10 % spread of such timings: ``xla_llvm_disable_expensive_passes``,
+  ``xla_cpu_parallel_codegen_split_count=1``, ``xla_cpu_use_thunk_runtime=false``,
+  ``xla_cpu_enable_concurrency_optimized_scheduler=false``,
+  ``xla_cpu_emitter_verification_level=0``, ``xla_cpu_copy_insertion_use_region_analysis=false``,
+  and JAX's ``jax_exec_time_optimization_effort=-1``; most of the remaining time is
+  XLA's HLO passes (LLVM at level 0 instead of 3 saves ~20 %).
 
 Programs that run once per simulation (the initial state: consistent accelerations and
 projections, a few linear solves) are compiled with :func:`run_once_options`, LLVM's
