@@ -230,3 +230,36 @@ def test_time_grid_never_shortens_the_step_asked_for():
         assert n == max(1, math.ceil(t_end / out_asked * (1 - 1e-9)))
         if out is None:
             assert sub == 1 and n == max(1, math.ceil(t_end / dt * (1 - 1e-9)))
+
+
+# ---------------------------------------------------------------------------- simulate_each
+def test_simulate_each_equals_single_runs_and_reports_failures():
+    """Members in two threads give exactly their single runs (two structures: 2 and 3
+    elements, two damping values); a member made to fail (α = NaN: a NaN state) is named
+    in the SimulationError after every member ran, or returned with its status."""
+    from ancf_jax import ModelError
+    from ancf_jax.simulation import simulate_each
+
+    a, b = m1_model(2).build(), m1_model(3).build()
+    damped = (eqx.tree_at(lambda s: s.beams[0].alpha, a[0], jnp.asarray(0.5)), a[1])
+    members = [a, b, damped]
+    kw = dict(t_end=0.03, dt=1e-3, progress=False)
+    runs = simulate_each([m[0] for m in members], [m[1] for m in members], workers=2, **kw)
+    for (system, state), r in zip(members, runs):
+        single = simulate(system, state, **kw)
+        np.testing.assert_array_equal(r.q, single.q)
+        np.testing.assert_array_equal(r.lam, single.lam)
+    assert not np.array_equal(runs[0].q, runs[2].q)  # the damping reached its member
+
+    bad = (eqx.tree_at(lambda s: s.beams[0].alpha, a[0], jnp.asarray(np.nan)), a[1])
+    with pytest.raises(SimulationError, match="member 1: ") as err:
+        simulate_each([a[0], bad[0], a[0]], [a[1], bad[1], a[1]], workers=2, **kw)
+    assert [r.status for r in err.value.results][::2] == ["ok", "ok"] and err.value.results[1].status != "ok"
+    returned = simulate_each([a[0], bad[0]], [a[1], bad[1]], on_failure="return", **kw)
+    assert returned[0].status == "ok" and returned[1].status == err.value.results[1].status
+
+    for workers in (0, 1.5, True):
+        with pytest.raises(ModelError, match=r"workers must be an integer >= 1"):
+            simulate_each([a[0]], [a[1]], workers=workers, **kw)
+    with pytest.raises(ModelError, match="equally many"):
+        simulate_each([a[0]], [], **kw)
