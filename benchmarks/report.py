@@ -471,6 +471,21 @@ def sec_step_profile(d):
             + f"\n_Command: `python -m benchmarks.step_profile`; {d['stamp']['date']}._\n")
 
 
+def _batch_threads_note() -> str:
+    """The CPU batch as threads of single runs (benchmarks/batch_threads.py), if measured."""
+    path = Path(__file__).parent / "results" / "batch_threads.json"
+    if not path.exists():
+        return ""
+    m = json.loads(path.read_text())
+    p, r = m["per_simulation_s"], m["ratio_to_one_exudyn_run"]
+    return (f"\nThe same variants as single runs over threads (`simulate_each`, "
+            f"`python -m benchmarks.batch_threads`, {m['stamp']['date'][:10]}, first {m['members']} members, "
+            f"one process): {ms(p['two_threads'])} per simulation in two threads against {ms(p['vmapped'])} "
+            f"vmapped and {ms(p['sequential'])} one after the other; per simulation / one Exudyn run "
+            f"{f(r['two_threads'])} (vmapped {f(r['vmapped'])}). On the CPU a vmapped member costs more than a "
+            f"single run; the threads use both cores.\n")
+
+
 def sec_batch(d, plots):
     out = ["## Batch throughput (M1 variants; M2 s₀ variants)\n\n", _error_block(d)]
     if d.get("rows"):
@@ -499,6 +514,7 @@ def sec_batch(d, plots):
                        f"{f(s['median_run_plus_build_s'])} s with the model build). Final tip Y of the "
                        f"serial Exudyn runs vs the ancf_jax batch members: max {f(s['final_tip_y_max_difference_to_ancf_m'])} m. "
                        f"Pool start-up: {f(d['exudyn_pool']['startup_s'])} s (not included).\n")
+        out.append(_batch_threads_note())
         if "batch" in plots:
             out.append(f"\n![batch]({plots['batch']})\n")
     if d.get("s0"):
