@@ -658,10 +658,10 @@ def simulate_each(systems, states, *, workers: int | None = None, on_failure: st
 
     On the CPU this is the faster way to run many small models: a vmapped batch
     (:func:`simulate_batch`) adds no arithmetic units there and its batched small
-    factorizations cost more than unbatched ones. Measured on 2 cores, 64 M1 variants
+    factorizations cost more than unbatched ones. Measured on 2 cores, 256 M1 variants
     (6 elements, 0–2 s, h = 1.25 ms; ``python -m benchmarks.batch_threads``,
-    2026-12-06): 91.3 ms per simulation vmapped, 63.6 ms one after the other, 35.2 ms
-    in two threads by this function; one Exudyn run 127 ms. On a GPU, use
+    2026-12-06): 94.5 ms per simulation vmapped, 71.0 ms one after the other, 40.2 ms
+    in two threads by this function; one Exudyn run 142 ms. On a GPU, use
     :func:`simulate_batch`.
 
     Args:

@@ -1,4 +1,4 @@
-# python -m benchmarks.batch_threads  (from the repository root)
+# python -m benchmarks.batch_threads [N]  (from the repository root; N members, default 256)
 """Is one vmapped program the fastest way to run a CPU batch of M1 variants?
 
 The batch rows of RESULTS.md (benchmarks/batch.py) show a vmapped member costing more
@@ -19,6 +19,7 @@ a CPU batch strategy, not a target row: writes benchmarks/results/batch_threads.
 from __future__ import annotations
 
 import json
+import sys
 import statistics
 import time
 
@@ -29,23 +30,24 @@ from benchmarks import exudyn_models as em
 from benchmarks.batch import variants, with_parameters
 from benchmarks.common import write
 
-N = 64
+N = 256  # the batch target's size
 
 
-def main():
+def main(argv=None):
+    n = int((argv if argv is not None else sys.argv[1:] or [N])[0])
     from ancf_jax.integrate import RunLimits
     from ancf_jax.simulation import make_solver, simulate, simulate_batch, simulate_each
 
     system, state = C.m1(6)
     dt, opts = C.chosen_settings("M1")
     e_dt, e_opts = C.chosen_settings("M1", "exudyn")
-    systems = [with_parameters(system, a, e) for a, e in variants(N)]
+    systems = [with_parameters(system, a, e) for a, e in variants(n)]
     kw = dict(t_end=2.0, dt=dt, output_dt=C.GRID, solver=make_solver("generalized-alpha", **opts),
               on_failure="return", progress=False)
 
-    simulate_batch(systems, [state] * N, limits=RunLimits(chunks=1), **kw)  # compiles
+    simulate_batch(systems, [state] * n, limits=RunLimits(chunks=1), **kw)  # compiles
     t0 = time.perf_counter()
-    batch = simulate_batch(systems, [state] * N, limits=RunLimits(chunks=1), **kw)
+    batch = simulate_batch(systems, [state] * n, limits=RunLimits(chunks=1), **kw)
     vmapped = time.perf_counter() - t0
 
     simulate(systems[0], state, **kw)  # compiles
@@ -54,7 +56,7 @@ def main():
     sequential = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    threaded = simulate_each(systems, [state] * N, workers=2, **kw)  # compiled above
+    threaded = simulate_each(systems, [state] * n, workers=2, **kw)  # compiled above
     two_threads = time.perf_counter() - t0
 
     exudyn = []
@@ -68,10 +70,10 @@ def main():
     def diff(a, b):
         return max(float(np.max(np.abs(np.asarray(x.q) - np.asarray(y.q)))) for x, y in zip(a, b))
 
-    out = dict(members=N, ancf_dt=dt, ancf_options=opts, exudyn_dt=e_dt, exudyn_run_s=one,
-               per_simulation_s=dict(vmapped=vmapped / N, sequential=sequential / N, two_threads=two_threads / N),
-               ratio_to_one_exudyn_run=dict(vmapped=vmapped / N / one, sequential=sequential / N / one,
-                                            two_threads=two_threads / N / one),
+    out = dict(members=n, ancf_dt=dt, ancf_options=opts, exudyn_dt=e_dt, exudyn_run_s=one,
+               per_simulation_s=dict(vmapped=vmapped / n, sequential=sequential / n, two_threads=two_threads / n),
+               ratio_to_one_exudyn_run=dict(vmapped=vmapped / n / one, sequential=sequential / n / one,
+                                            two_threads=two_threads / n / one),
                max_q_difference=dict(vmapped_vs_threads=diff(batch, threaded), serial_vs_threads=diff(serial, threaded)),
                ok=sum(r.status == "ok" for r in threaded))
     print(json.dumps(out, indent=1))
