@@ -197,11 +197,24 @@ def _chunking(n_intervals: int, substeps: int, chunks: int | None,
     return per, int(math.ceil(n_intervals / per))
 
 
+def _check_on_failure(on_failure):
+    if on_failure not in ("raise", "return"):
+        raise ModelError(f"on_failure must be 'raise' or 'return', got {on_failure!r}")
+
+
+def _raise_failed_members(out):
+    """:class:`SimulationError` naming every member of ``out`` (a list of Results) that
+    did not end ok, with all of them as its ``results``; nothing if all did."""
+    if any(r.status != "ok" for r in out):
+        bad = [f"member {i}: {r.message}" for i, r in enumerate(out) if r.status != "ok"]
+        first = next(r for r in out if r.status != "ok")
+        raise SimulationError("; ".join(bad), time=first.failure_time, reason=first.status, results=out)
+
+
 def _prepare(t_end, dt, solver, output_dt, options, limits, on_failure, batched=False):
     """Check the run arguments (before anything is compiled) and derive the solver
     instance, time grid and chunking."""
-    if on_failure not in ("raise", "return"):
-        raise ModelError(f"on_failure must be 'raise' or 'return', got {on_failure!r}")
+    _check_on_failure(on_failure)
     if not isinstance(options, RunOptions):
         raise ModelError(f"options must be a RunOptions, got {type(options).__name__}")
     if not isinstance(limits, RunLimits):
@@ -640,10 +653,8 @@ def simulate_batch(systems, states, *, t_end: float, dt: float | None = None,
     stopped = [r for r in out if r.status == Failure.INTERRUPTED.reason]
     if on_failure == "raise" and stopped:
         raise SimulationInterrupted(stopped[0].message, time=stopped[0].failure_time, results=out)
-    if on_failure == "raise" and any(r.status != "ok" for r in out):
-        bad = [f"member {i}: {r.message}" for i, r in enumerate(out) if r.status != "ok"]
-        first = next(r for r in out if r.status != "ok")
-        raise SimulationError("; ".join(bad), time=first.failure_time, reason=first.status, results=out)
+    if on_failure == "raise":
+        _raise_failed_members(out)
     return out
 
 
@@ -687,8 +698,7 @@ def simulate_each(systems, states, *, workers: int | None = None, on_failure: st
         workers = os.cpu_count() or 1
     if isinstance(workers, bool) or not isinstance(workers, (int, np.integer)) or workers < 1:
         raise ModelError(f"workers must be an integer >= 1 (threads), got {workers!r}")
-    if on_failure not in ("raise", "return"):
-        raise ModelError(f"on_failure must be 'raise' or 'return', got {on_failure!r}")
+    _check_on_failure(on_failure)
     run = dict(run, on_failure="return", progress=False)
     out: list = [None] * len(systems)
     out[0] = simulate(systems[0], states[0], **run)  # compiles the common program once
@@ -712,10 +722,8 @@ def simulate_each(systems, states, *, workers: int | None = None, on_failure: st
                                     time=max(float(r.t[-1]) for r in done), results=out) from None
     finally:
         pool.shutdown(wait=True)
-    if on_failure == "raise" and any(r.status != "ok" for r in out):
-        bad = [f"member {i}: {r.message}" for i, r in enumerate(out) if r.status != "ok"]
-        first = next(r for r in out if r.status != "ok")
-        raise SimulationError("; ".join(bad), time=first.failure_time, reason=first.status, results=out)
+    if on_failure == "raise":
+        _raise_failed_members(out)
     return out
 
 
