@@ -13,7 +13,10 @@ settings) three ways, each compiled before the clock starts:
 * ``simulate_each`` with two threads (XLA releases the GIL while a program runs),
 
 against one Exudyn run (median of 5) at its equal-accuracy settings. An exploration for
-a CPU batch strategy, not a target row: writes benchmarks/results/batch_threads.json.
+a CPU batch strategy, not a target row: writes benchmarks/results/batch_threads.json, or
+batch_threads_loop_kernels.json when the process runs with XLA's loop kernels
+(``ANCF_JAX_LOOP_KERNELS=1 python -m benchmarks.batch_threads``; :mod:`ancf_jax._xla`),
+which single runs of M1 gain from and vmapped batches do not.
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ N = 256  # the batch target's size
 
 def main(argv=None):
     n = int((argv if argv is not None else sys.argv[1:] or [N])[0])
+    from ancf_jax import _xla
     from ancf_jax.integrate import RunLimits
     from ancf_jax.simulation import make_solver, simulate, simulate_batch, simulate_each
 
@@ -70,14 +74,15 @@ def main(argv=None):
     def diff(a, b):
         return max(float(np.max(np.abs(np.asarray(x.q) - np.asarray(y.q)))) for x, y in zip(a, b))
 
-    out = dict(members=n, ancf_dt=dt, ancf_options=opts, exudyn_dt=e_dt, exudyn_run_s=one,
+    kernels = _xla.loop_kernels()
+    out = dict(members=n, loop_kernels=kernels, ancf_dt=dt, ancf_options=opts, exudyn_dt=e_dt, exudyn_run_s=one,
                per_simulation_s=dict(vmapped=vmapped / n, sequential=sequential / n, two_threads=two_threads / n),
                ratio_to_one_exudyn_run=dict(vmapped=vmapped / n / one, sequential=sequential / n / one,
                                             two_threads=two_threads / n / one),
                max_q_difference=dict(vmapped_vs_threads=diff(batch, threaded), serial_vs_threads=diff(serial, threaded)),
                ok=sum(r.status == "ok" for r in threaded))
     print(json.dumps(out, indent=1))
-    write("batch_threads", out)
+    write("batch_threads_loop_kernels" if kernels else "batch_threads", out)
 
 
 if __name__ == "__main__":

@@ -472,18 +472,27 @@ def sec_step_profile(d):
 
 
 def _batch_threads_note() -> str:
-    """The CPU batch as threads of single runs (benchmarks/batch_threads.py), if measured."""
-    path = Path(__file__).parent / "results" / "batch_threads.json"
-    if not path.exists():
-        return ""
-    m = json.loads(path.read_text())
-    p, r = m["per_simulation_s"], m["ratio_to_one_exudyn_run"]
-    return (f"\nThe same variants as single runs over threads (`simulate_each`, "
-            f"`python -m benchmarks.batch_threads`, {m['stamp']['date'][:10]}, first {m['members']} members, "
-            f"one process): {ms(p['two_threads'])} per simulation in two threads against {ms(p['vmapped'])} "
-            f"vmapped and {ms(p['sequential'])} one after the other; per simulation / one Exudyn run "
-            f"{f(r['two_threads'])} (vmapped {f(r['vmapped'])}). On the CPU a vmapped member costs more than a "
-            f"single run; the threads use both cores.\n")
+    """The CPU batch as threads of single runs (benchmarks/batch_threads.py), if measured:
+    with XLA's default flags and, where measured, with loop kernels on."""
+    results = Path(__file__).parent / "results"
+    out = []
+    for name, how in (("batch_threads", ""), ("batch_threads_loop_kernels",
+                                             " with loop kernels on (`ANCF_JAX_LOOP_KERNELS=1`, opt-in)")):
+        path = results / f"{name}.json"
+        if not path.exists():
+            continue
+        m = json.loads(path.read_text())
+        p, r = m["per_simulation_s"], m["ratio_to_one_exudyn_run"]
+        env = "ANCF_JAX_LOOP_KERNELS=1 " if m.get("loop_kernels") else ""
+        out.append(f"\nThe same variants as single runs over threads{how} (`simulate_each`, "
+                   f"`{env}python -m benchmarks.batch_threads`, {m['stamp']['date'][:10]}, first {m['members']} "
+                   f"members, one process): {ms(p['two_threads'])} per simulation in two threads against "
+                   f"{ms(p['vmapped'])} vmapped and {ms(p['sequential'])} one after the other; per simulation / "
+                   f"one Exudyn run ({ms(m['exudyn_run_s'])}, same process) {f(r['two_threads'])} (vmapped "
+                   f"{f(r['vmapped'])}).\n")
+    if out:
+        out.append("On the CPU a vmapped member costs more than a single run; the threads use both cores.\n")
+    return "".join(out)
 
 
 def sec_batch(d, plots):
