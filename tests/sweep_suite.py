@@ -324,8 +324,10 @@ def spawned(tmp_path_factory):
     with pool:
         out = {"shard": (tmp / "two.zarr", shard.result())}
         if importlib.util.find_spec("ray") is not None:  # found, not imported (docstring)
+            # chunks of one member: six chunks on two workers, so that workers run several
             out["ray"] = (tmp / "ray.zarr", pool.submit(_case, "sweep_on_ray_killing_a_worker", PARAMS,
-                                                        str(tmp / "ray.zarr"), KW, str(ROOT)).result())
+                                                        str(tmp / "ray.zarr"), dict(KW, chunk_size=1),
+                                                        str(ROOT)).result())
     assert "ray" not in sys.modules  # the pytest worker stayed free of Ray
     return out
 
@@ -338,11 +340,22 @@ def _case(name, *args):
 
 def test_ray_equals_local_with_a_worker_killed(spawned, local_store):
     """On a running cluster reached by its address (``--address``), every member comes
-    back exactly once and equals the local backend."""
+    back exactly once and equals the local backend (chunks of 2 there, of 1 here). A
+    worker compiles the chunk program once: every later chunk it runs reports 0 s of
+    compilation (the in-process cache of ancf_jax.simulation.compiled), and every
+    worker had the driver's persistent compilation cache."""
+    import jax
     if "ray" not in spawned:
         pytest.skip("ray is not installed (it is in the test extra)")
     _, local, _, _ = local_store
-    out, (seen, killed, address) = spawned["ray"]
+    out, (seen, killed, address, chunks) = spawned["ray"]
+    by_pid = {}
+    for pid, compile_s, cache in chunks:
+        by_pid.setdefault(pid, []).append(compile_s)
+        assert cache == jax.config.jax_compilation_cache_dir and cache, (cache, chunks)
+    assert max(map(len, by_pid.values())) >= 2, chunks  # six chunks, two CPUs: a worker ran several
+    assert all(c == 0.0 for runs in by_pid.values() for c in runs[1:]), chunks
+    assert any(runs[0] > 0.0 for runs in by_pid.values()), chunks  # compile_s measures compilation
     assert address.rsplit(":", 1)[1].isdigit()
     assert killed, "no chunk was running when the first one finished"
     assert sorted(seen) == list(range(6))  # every member came back exactly once
