@@ -794,6 +794,16 @@ def _sweep(args) -> int:
                        progress=False if args.no_progress else None)
     except SweepError as e:
         raise _UsageError(str(e)) from None
+    except KeyboardInterrupt:  # the chunks stored until then stay in the store
+        if not Path(args.out).exists():
+            print("ancf-jax sweep: interrupted (Ctrl-C) before the store was created", file=sys.stderr)
+            return 130
+        from .sweep.store import open_store
+        ds = open_store(args.out)
+        print(f"ancf-jax sweep: interrupted (Ctrl-C): {int((ds['stored'].values == 1).sum())} of "
+              f"{ds.sizes['member']} members stored in {args.out}; --resume (same arguments) runs the rest",
+              file=sys.stderr)
+        return 130
     status = ds["status"].values
     counts = {s: int((status == s).sum()) for s in sorted(set(status.tolist()))}
     run = json.loads(ds.attrs["runs"])[-1]

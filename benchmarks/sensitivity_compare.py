@@ -10,29 +10,47 @@ the total index of a uniform input on [a_i, b_i] (Sobol & Kucherenko 2009, Theor
     ST_i ≤ (b_i − a_i)² ν_i / (π² D),     D = Var(y),
 
 and the local sensitivity at the box centre gives the ranking a one-point study would.
-Writes benchmarks/results/sensitivity_compare.json and .md.
+Writes benchmarks/results/sensitivity_compare.json and .md, and the bar chart of the
+Sobol indices (``sobol_figure``) that docs/sweeps.md shows, docs/img/sweep_sobol_m1.png
+(``--figure``: only the chart, redrawn from the JSON of the last run).
 
     python -m benchmarks.sensitivity_compare [--quick]    # quick: N = 8, 0.5 s
+    python -m benchmarks.sensitivity_compare --figure     # the chart from the results
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-from .common import table, write
+from .common import RESULTS, table, write
 
 KEYS = {"beams.beam.alpha": (0.01, 0.1), "bodies.tip.mass": (0.015, 0.025)}
+FIGURE = Path(__file__).resolve().parents[1] / "docs" / "img" / "sweep_sobol_m1.png"
+
+
+def figure(data: dict) -> Path:
+    """The Sobol indices of a run's results (the JSON's fields) as docs/img's bar chart."""
+    from ancf_jax.sweep.sensitivity import sobol_figure
+    indices = {k: {f: v[f] for f in ("S1", "S1_conf", "ST", "ST_conf")} for k, v in data["keys"].items()}
+    sobol_figure(indices, FIGURE, title=f"M1: min tip_y over {data['t_end']:g} s\n"
+                                        f"Saltelli N = {data['n']} ({data['members']} members)")
+    return FIGURE
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--figure", action="store_true", help="only redraw the figure from the last results")
     args = ap.parse_args(argv)
+    if args.figure:
+        print(figure(json.loads((RESULTS / "sensitivity_compare.json").read_text())))
+        return
     n, t_end = (8, 0.5) if args.quick else (32, 2.0)
     from ancf_jax.sweep import run_sweep
     from ancf_jax.sweep.sensitivity import local_sensitivities, scalar, sobol_indices
@@ -68,8 +86,11 @@ def main(argv=None):
           + "\n\n_Command: `python -m benchmarks.sensitivity_compare" + (" --quick" if args.quick else "")
           + "`._\n")
     print(md)
-    write("sensitivity_compare", dict(quick=args.quick, n=n, t_end=t_end, members=len(y), variance=d,
-                                      sweep_s=sweep_s, local_s=local_s, keys=data), md)
+    results = dict(quick=args.quick, n=n, t_end=t_end, members=len(y), variance=d, sweep_s=sweep_s,
+                   local_s=local_s, keys=data)
+    write("sensitivity_compare", results, md)
+    if not args.quick:  # the docs show the full run
+        figure(results)
 
 
 if __name__ == "__main__":

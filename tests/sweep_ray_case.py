@@ -36,7 +36,9 @@ def sweep_on_ray_killing_a_worker(params, out, kw, root):
     127.0.0.1 is sent there by Ray's address resolution; nothing leaves the machine),
     and the sweep connected to it by its address (the ``--address`` path of
     ``ancf-jax sweep``) while one worker is killed (SIGKILL) mid-chunk; ``ray stop``
-    afterwards. Returns (members seen in chunk order, pids killed, the address)."""
+    afterwards. Returns (members seen in chunk order, pids killed, the address, and per
+    chunk in order (worker pid, seconds it spent compiling, the JAX persistent cache
+    directory it used))."""
     import shutil
     import subprocess
     import sys
@@ -59,10 +61,11 @@ def sweep_on_ray_killing_a_worker(params, out, kw, root):
     import ray
 
     from ancf_jax.sweep import run_sweep
-    seen, killed = [], []
+    seen, killed, chunks = [], [], []
 
     def kill_one(result):
         seen.extend(result["members"])
+        chunks.append((result["pid"], result["compile_s"], result["compilation_cache"]))
         if not killed:
             for p in _chunk_workers():
                 p.kill()  # SIGKILL the worker mid-chunk: Ray retries its task elsewhere
@@ -75,7 +78,7 @@ def sweep_on_ray_killing_a_worker(params, out, kw, root):
     finally:
         ray.shutdown()
         subprocess.run([ray_cli, "stop", "--force"], env=env, capture_output=True, timeout=180)
-    return seen, killed, address
+    return seen, killed, address, chunks
 
 
 def sweep_sharded_across_two_host_devices(params, out, kw):

@@ -153,6 +153,98 @@ def test_store_equals_direct_simulate(local_store):
     assert np.min(np.abs(np.diff(np.sort(y)))) > 1e-9
 
 
+def test_element_counts_and_spans_in_one_sweep(tmp_path):
+    """Members of 2 and 3 elements (padded to 3: one vmapped program per span) over spans
+    of 0.012 and 0.02 s (two groups of run settings, each in chunks of its own): the
+    store's time is the union of the grids, a short member is NaN after its span, and
+    every member equals a direct run of its own, unpadded, scenario."""
+    from ancf_jax.outputs import evaluate
+    from ancf_jax.scenario import load_scenario
+    chunks = []
+    ds = run_sweep("m1", ["beams.beam.elements=[2, 3]", "solver.t_end=[0.012, 0.02]"], out=tmp_path / "e.zarr",
+                   design="grid", overrides=BASE, chunk_size=2, progress=False, on_chunk=chunks.append).load()
+    n_el, t_end = ds["beams.beam.elements"].values, ds["solver.t_end"].values
+    assert list(ds["status"].values) == ["ok"] * 4 and np.all(ds["stored"].values == 1)
+    assert len(chunks) == 2
+    for c in chunks:  # one span per chunk, both element counts in it
+        assert len(set(t_end[c["members"]])) == 1 and set(n_el[c["members"]]) == {2, 3}
+        assert len(c["times"]) == round(t_end[c["members"][0]] / 2e-3) + 1
+    assert np.allclose(ds["time"].values, np.linspace(0, 0.02, 11))
+    tips = {}
+    for m in range(4):
+        sc = load_scenario("m1", BASE + [f"beams.beam.elements={int(n_el[m])}", f"solver.t_end={float(t_end[m])!r}"])
+        cols = evaluate(sc.simulate(progress=False), sc.outputs)
+        rows = len(cols["t"])
+        assert rows == round(t_end[m] / 2e-3) + 1
+        for name in ("tip_x", "tip_y", "sigma_e1_mid"):
+            np.testing.assert_allclose(ds[name].values[m, :rows], cols[name], rtol=1e-12,
+                                       atol=1e-12 * np.max(np.abs(cols[name])))
+            assert np.all(np.isnan(ds[name].values[m, rows:]))  # beyond the member's span
+        tips[int(n_el[m]), float(t_end[m])] = cols["tip_y"]
+    # the element count matters (a store that mixed the meshes up would fail above)
+    assert np.max(np.abs(tips[2, 0.02] - tips[3, 0.02])) > 1e-7
+
+
+def test_a_chunk_that_comes_back_twice_is_stored_once(tmp_path, monkeypatch):
+    """As Ray may deliver a chunk again (a retry) or first as failed: a backend whose
+    every chunk comes back as ``error`` (retries exhausted), then with its results, then
+    again with other numbers. Each member is stored once, with the first results."""
+    from ancf_jax.sweep import backends, store
+    from ancf_jax.sweep.backends import LocalBackend, failed_chunk
+    sent, writes = [], []
+
+    class Retrying(LocalBackend):
+        def run(self, tasks):
+            for task in tasks:
+                r = next(super().run([task]))
+                sent.append(r)
+                yield failed_chunk(task, "RayTaskError: the worker died")
+                yield r
+                yield dict(r, outputs={k: v + 1.0 for k, v in r["outputs"].items()}, status=["nan"] * len(r["status"]))
+
+    real_write = store.write
+
+    def spy(path, members, times, result, run):
+        writes.append([(m, result["status"][result["members"].index(m)]) for m in members])
+        real_write(path, members, times, result, run)
+
+    monkeypatch.setattr(backends, "get_backend", lambda name, address=None: Retrying())
+    monkeypatch.setattr(store, "write", spy)
+    params = [PARAMS[0], "bodies.tip.mass=[0.01, 0.02]"]
+    ds = run_sweep("m1", params, out=tmp_path / "twice.zarr", **KW).load()
+    assert len(sent) == 2 and list(ds["status"].values) == ["ok"] * 4 and np.all(ds["stored"].values == 1)
+    stored = sorted(m for w in writes for m, s in w if s != "error")
+    assert stored == [0, 1, 2, 3]  # each member's results written once
+    for r in sent:
+        np.testing.assert_array_equal(ds["tip_y"].values[r["members"]], r["outputs"]["tip_y"])
+    run = json.loads(ds.attrs["runs"])[0]
+    assert run["stored"] == 4 and run["completed"]
+
+
+def test_default_chunk_size_fits_the_memory_budget():
+    """Without --chunk-size a chunk holds as many members as keep at most CHUNK_BYTES of
+    histories (what simulate_batch counts against max_output_bytes), at most
+    MAX_CHUNK, split so that every worker gets a chunk."""
+    from ancf_jax.simulation import run_size
+    from ancf_jax.sweep import SweepDefinition, plan
+    from ancf_jax.sweep.runner import CHUNK_BYTES, MAX_CHUNK
+    params = tuple(parse_param(p) for p in PARAMS)
+
+    def size(t_end, **kw):
+        d = SweepDefinition("m1", params, design="grid", levels=2, overrides=(*BASE, f"solver.t_end={t_end}"))
+        return plan(d, **kw)
+
+    assert size(0.02).chunk_size == 6 and size(0.02, workers=2).chunk_size == 3
+    assert size(0.02, workers=2, multiple=2).chunk_size == 4  # a multiple of the devices
+    # 1,600 s keep 800,001 rows per member of 19 coordinates (4 nodes of 4, the tip
+    # body's 3) and 7 multipliers: 0.44 GB a member, 2 members fit in 1 GiB
+    p = size(1600.0)
+    one = run_size(800_000, 1, 19, 7)[1]
+    assert p.chunk_size == CHUNK_BYTES // one == 2 and 2 * one <= CHUNK_BYTES < 3 * one
+    assert [len(c.members) for c in p.chunks] == [2, 2, 2]
+    assert MAX_CHUNK == 256
+
+
 def test_failing_members_are_stored_with_their_failure(tmp_path):
     """A Newton limit of 1 iteration fails every member (one compiled program: members
     of other settings would each compile their own): the sweep still completes and
@@ -166,14 +258,34 @@ def test_failing_members_are_stored_with_their_failure(tmp_path):
     assert all("Newton" in m for m in ds["message"].values)
 
 
-def test_cli_sweep_resumes_the_api_run(tmp_path, capsys):
+def test_cli_sweep_interrupted_then_resumed(tmp_path, capsys, monkeypatch):
+    """Ctrl-C in the time loop of the second chunk (simulate_batch returns its members
+    as ``interrupted``, as on a real Ctrl-C with on_failure="return"): the command
+    stops with one line saying how many members are stored and that --resume runs the
+    rest, which it does."""
+    import ancf_jax.simulation as simulation
+    from ancf_jax.failures import Failure
     out = tmp_path / "cli.zarr"
-    with pytest.raises(KeyboardInterrupt):
-        run_sweep("m1", PARAMS, out=out, on_chunk=lambda r: (_ for _ in ()).throw(KeyboardInterrupt()), **KW)
     argv = ["sweep", "m1", "--param", PARAMS[0], "--param", PARAMS[1], "--design", "grid", "--levels", "2",
             "--chunk-size", "2", "--no-progress", "--out", str(out)]
     for s in BASE:
         argv += ["--set", s]
+    real, calls = simulation.simulate_batch, []
+
+    def ctrl_c_in_the_second(*args, **kw):
+        results = real(*args, **kw)
+        calls.append(len(results))
+        if len(calls) == 2:
+            for r in results:
+                r.status = Failure.INTERRUPTED.reason
+        return results
+
+    with monkeypatch.context() as mp:
+        mp.setattr(simulation, "simulate_batch", ctrl_c_in_the_second)
+        assert main(argv) == 130
+    err = capsys.readouterr().err.strip()
+    assert len(calls) == 2 and len(err.splitlines()) == 1, err
+    assert "interrupted (Ctrl-C): 2 of 6 members stored" in err and "--resume" in err, err
     assert main(argv) == 2 and "--resume" in capsys.readouterr().err  # the store exists
     nc = tmp_path / "cli.nc"
     assert main(argv + ["--resume", "--netcdf", str(nc)]) == 0
@@ -212,8 +324,10 @@ def spawned(tmp_path_factory):
     with pool:
         out = {"shard": (tmp / "two.zarr", shard.result())}
         if importlib.util.find_spec("ray") is not None:  # found, not imported (docstring)
+            # chunks of one member: six chunks on two workers, so that workers run several
             out["ray"] = (tmp / "ray.zarr", pool.submit(_case, "sweep_on_ray_killing_a_worker", PARAMS,
-                                                        str(tmp / "ray.zarr"), KW, str(ROOT)).result())
+                                                        str(tmp / "ray.zarr"), dict(KW, chunk_size=1),
+                                                        str(ROOT)).result())
     assert "ray" not in sys.modules  # the pytest worker stayed free of Ray
     return out
 
@@ -226,11 +340,22 @@ def _case(name, *args):
 
 def test_ray_equals_local_with_a_worker_killed(spawned, local_store):
     """On a running cluster reached by its address (``--address``), every member comes
-    back exactly once and equals the local backend."""
+    back exactly once and equals the local backend (chunks of 2 there, of 1 here). A
+    worker compiles the chunk program once: every later chunk it runs reports 0 s of
+    compilation (the in-process cache of ancf_jax.simulation.compiled), and every
+    worker had the driver's persistent compilation cache."""
+    import jax
     if "ray" not in spawned:
         pytest.skip("ray is not installed (it is in the test extra)")
     _, local, _, _ = local_store
-    out, (seen, killed, address) = spawned["ray"]
+    out, (seen, killed, address, chunks) = spawned["ray"]
+    by_pid = {}
+    for pid, compile_s, cache in chunks:
+        by_pid.setdefault(pid, []).append(compile_s)
+        assert cache == jax.config.jax_compilation_cache_dir and cache, (cache, chunks)
+    assert max(map(len, by_pid.values())) >= 2, chunks  # six chunks, two CPUs: a worker ran several
+    assert all(c == 0.0 for runs in by_pid.values() for c in runs[1:]), chunks
+    assert any(runs[0] > 0.0 for runs in by_pid.values()), chunks  # compile_s measures compilation
     assert address.rsplit(":", 1)[1].isdigit()
     assert killed, "no chunk was running when the first one finished"
     assert sorted(seen) == list(range(6))  # every member came back exactly once

@@ -103,12 +103,17 @@ class RayBackend:
                 try:
                     yield ray.get(ref)
                 except ray.exceptions.RayError as e:  # retries exhausted: the members stay missing
-                    t = refs[ref]
-                    n = len(t.members)
-                    msg = f"{type(e).__name__}: {e}".splitlines()[0]
-                    yield dict(members=list(t.members), times=[], outputs={k: [[]] * n for k in t.outputs},
-                               status=["error"] * n, message=[msg] * n, failure_time=[float("nan")] * n,
-                               compile_s=0.0, wall_s=0.0, pid=None, host=None)
+                    yield failed_chunk(refs[ref], f"{type(e).__name__}: {e}".splitlines()[0])
+
+
+def failed_chunk(task: ChunkTask, message: str) -> dict:
+    """The result of a chunk that never ran to the end (a Ray task whose retries are
+    exhausted): every member ``"error"`` with ``message``, so that the store leaves
+    them unstored and ``--resume`` runs them again."""
+    n = len(task.members)
+    return dict(members=list(task.members), times=[], outputs={k: [[]] * n for k in task.outputs},
+                status=["error"] * n, message=[message] * n, failure_time=[float("nan")] * n,
+                compile_s=0.0, wall_s=0.0, pid=None, host=None, compilation_cache=None)
 
 
 def get_backend(name: str, *, address: str | None = None):

@@ -23,10 +23,11 @@ import numpy as np
 
 from .._version import __version__
 from ..errors import ModelError
+from ..failures import Failure
 from ..scenario import ScenarioError, load_scenario
 from ..scenario.scenario import RunSettings
 from ..outputs import output_units
-from ..simulation import FIXED_STEP_SOLVERS, time_grid
+from ..simulation import FIXED_STEP_SOLVERS, run_size, time_grid
 from .design import Param, SweepError, make_design, override
 
 #: default memory budget of one chunk's histories [bytes]
@@ -140,7 +141,8 @@ def plan(definition: SweepDefinition, *, chunk_size: int | None = None, workers:
     array shapes (other than element counts, which are padded to the largest), raises
     :class:`~ancf_jax.sweep.design.SweepError` with one line. Members with different
     run settings (``solver.dt``, ``solver.t_end``, ``outputs.dt``, ...) go into
-    separate chunks. ``chunk_size`` (default: from :data:`CHUNK_BYTES`, at most
+    separate chunks. ``chunk_size`` (default: as many members as keep at most
+    :data:`CHUNK_BYTES` of histories (:func:`member_bytes` each), at most
     :data:`MAX_CHUNK`, and split so that ``workers`` have work) is rounded up to a
     multiple of ``multiple`` (the number of devices a chunk is sharded across).
     """
@@ -200,13 +202,12 @@ def plan(definition: SweepDefinition, *, chunk_size: int | None = None, workers:
     if len(times) > 1:  # merge times equal to rounding
         keep = np.concatenate([[True], np.diff(times) > 1e-12 * max(1.0, times[-1])])
         times = times[keep]
-    dofs = int(np.asarray(ref[1].q).size)
+    dofs, n_mult = int(np.asarray(ref[1].q).size), int(ref[0].n_constraints)
     chunks = []
     size = chunk_size
     for key, members in groups.items():
-        rows = len(grids[key])
         if chunk_size is None:
-            per_member = 8 * rows * dofs * 6
+            per_member = member_bytes(kwargs[key], dofs, n_mult)
             size = max(1, min(MAX_CHUNK, CHUNK_BYTES // per_member, math.ceil(len(members) / max(1, workers))))
         size = int(math.ceil(size / multiple) * multiple)
         for s in range(0, len(members), size):
@@ -219,6 +220,14 @@ def plan(definition: SweepDefinition, *, chunk_size: int | None = None, workers:
                 chunk_size=size or 1, units=output_units(base.outputs))
 
 
+def member_bytes(run: dict, n_coordinates: int, n_multipliers: int) -> int:
+    """Bytes of one member's history in a chunk's output (``run``: a chunk's run
+    settings), as :func:`~ancf_jax.simulation.simulate_batch` counts them against
+    ``max_output_bytes`` (:func:`~ancf_jax.simulation.run_size`)."""
+    n_int, sub, _, _ = time_grid(run["t_end"], run["dt"], run["output_dt"])
+    return run_size(n_int, sub, n_coordinates, n_multipliers)[1]
+
+
 def _times(kw) -> np.ndarray:
     n_int, _, _, out_dt = time_grid(kw["t_end"], kw["dt"], kw["output_dt"])
     return out_dt * np.arange(n_int + 1)
@@ -229,9 +238,13 @@ def run_chunk(task: ChunkTask) -> dict:
 
     Never raises for a member: a member whose scenario is rejected gets status
     ``"invalid"``, a failed run its failure's reason; an exception of the whole batch
-    gives every member ``"error"`` (with its message). Returns plain NumPy data:
-    ``members``, ``times``, ``outputs`` {name: (members, times)}, ``status``,
-    ``message``, ``failure_time``, and ``compile_s``, ``wall_s``, ``pid``, ``host``.
+    gives every member ``"error"`` (with its message). Ctrl-C raises
+    ``KeyboardInterrupt`` (also when it stopped the batch's time loop, which would
+    otherwise return members cut short): the chunk is not stored, ``--resume`` reruns it.
+    Returns plain NumPy data: ``members``, ``times``, ``outputs`` {name: (members,
+    times)}, ``status``, ``message``, ``failure_time``, and ``compile_s`` (seconds spent
+    compiling now; 0.0 when this process had the program), ``wall_s``, ``pid``,
+    ``host``, ``compilation_cache`` (the JAX persistent cache directory it used, or None).
     """
     from ..outputs import evaluate
     from ..simulation import simulate_batch
@@ -243,7 +256,8 @@ def run_chunk(task: ChunkTask) -> dict:
     out = dict(members=list(task.members), times=times,
                outputs={k: np.full((n, t), np.nan) for k in task.outputs},
                status=[""] * n, message=[""] * n, failure_time=[math.nan] * n,
-               compile_s=0.0, wall_s=0.0, pid=os.getpid(), host=socket.gethostname())
+               compile_s=0.0, wall_s=0.0, pid=os.getpid(), host=socket.gethostname(),
+               compilation_cache=jax.config.jax_compilation_cache_dir)
     built, ok = [], []
     outputs = None
     for i, items in enumerate(task.member_overrides):
@@ -267,6 +281,8 @@ def run_chunk(task: ChunkTask) -> dict:
         for i in ok:
             out["status"][i], out["message"][i] = "error", f"{type(e).__name__}: {e}".splitlines()[0]
         return out
+    if any(r.status == Failure.INTERRUPTED.reason for r in results):
+        raise KeyboardInterrupt  # Ctrl-C in the time loop: members cut short are not results
     out["wall_s"] = time.perf_counter() - t0
     out["compile_s"] = results[0].compile_time_s
     for i, r in zip(ok, results):
@@ -350,13 +366,16 @@ def run_sweep(model: str, params: Sequence[Param | str], *, out, design: str = "
     stored_now = 0
     try:
         for result in runner.run(tasks):
+            # a member is stored once: a second result of it (a chunk Ray ran twice) is
+            # dropped; one with status "error" (not stored) may be replaced by a later one
             fresh = sorted(m for m in result["members"] if m not in written and not done[m])
             if fresh:
                 store.write(out, fresh, p.times, result, run)
-                written.update(m for m, s in zip(result["members"], result["status"]) if s != "error")
-                stored_now += len(fresh)
+                ok = {m for m, s in zip(result["members"], result["status"]) if s != "error"} & set(fresh)
+                written.update(ok)
+                stored_now += len(ok)
             compile_s += result["compile_s"]
-            bar.update(len(result["members"]))
+            bar.update(len(fresh))
             if on_chunk is not None:
                 on_chunk(result)
     finally:
