@@ -68,14 +68,13 @@ def exudyn_tip():
     return np.asarray(mbs.GetSensorStoredData(sensor))[:, 1:3]
 
 
-def ancf_tip():
-    """The same model in ancf_jax; tip (x, y) every 10 ms."""
+def ancf_model():
+    """The same model in ancf_jax (a :class:`~ancf_jax.model.Model`)."""
     from ancf_jax import mesh
     from ancf_jax.element.laws import StrainRateDamped
     from ancf_jax.element.strain_energy import Formulation
     from ancf_jax.model import Model, body_point, node
     from ancf_jax.section import Section
-    from ancf_jax.simulation import make_solver, simulate
 
     # Exudyn's cable: engineering strain, material curvature, Gauss 5 / Gauss 3 points
     exudyn_cable = Formulation(axial_strain="engineering", curvature="material",
@@ -86,7 +85,14 @@ def ancf_tip():
     m.clamp("support", "cable", 0, mode="exudyn")          # x, y, r'_y
     m.add_point_mass("bob", mass=M_TIP, position=(L, 0.0))
     m.revolute("pin", node("cable", -1), body_point("bob"))
-    system, state = m.build()
+    return m
+
+
+def ancf_tip():
+    """The model of :func:`ancf_model` run; tip (x, y) every 10 ms."""
+    from ancf_jax.simulation import make_solver, simulate
+
+    system, state = ancf_model().build()
     res = simulate(system, state, t_end=T_END, dt=H, output_dt=0.01, progress=False,
                    solver=make_solver("generalized-alpha", rho_inf=0.9, newton_tol=1e-10, refresh_every=1,
                                       velocity_projection=False))

@@ -85,3 +85,15 @@ def test_from_exudyn_sliding_joint_and_curved_cables(exudyn_process):
 
 def test_index2_matches_exudyn(exudyn_process):
     run_case(exudyn_process, "index2_matches_exudyn")
+
+
+def test_bilinear_law_matches_exudyn(exudyn_process):
+    run_case(exudyn_process, "bilinear_law_matches_exudyn")
+
+
+def test_from_exudyn_rigid_mechanism(exudyn_process):
+    run_case(exudyn_process, "from_exudyn_rigid_mechanism")
+
+
+def test_from_exudyn_formulations_and_offsets(exudyn_process):
+    run_case(exudyn_process, "from_exudyn_formulations_and_offsets")

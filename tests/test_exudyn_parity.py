@@ -44,12 +44,20 @@ def test_section_from_stiffness_is_the_same_beam():
     assert float(with_e.stress(nodes, 0.3)) == pytest.approx(s0, rel=1e-14)
     with pytest.raises(ModelError, match="needs Young's modulus.*youngs_modulus"):
         by_stiffness.stress(nodes, 0.3)
+    # an explicit outer-fibre distance c is the default fibre of the stresses: σ = −E c κ
+    # is linear in the fibre, so σ(c) = σ(c₀)·c/c₀, and equals σ at y = c given explicitly
+    c = 3.0 * float(with_e.section.fibre_distance)
+    with_c = Beam(m, Section.from_stiffness(E * A, E * I, RHO_A, youngs_modulus=E, fibre_distance=c))
+    assert float(with_c.section.fibre_distance) == c
+    assert float(with_c.stress(nodes, 0.3)) == pytest.approx(3.0 * s0, rel=1e-14)
+    assert float(with_c.stress(nodes, 0.3)) == float(with_e.stress(nodes, 0.3, y=c))
 
 
 @pytest.mark.parametrize("bad, match", [
     (dict(axial_stiffness=0.0), r"axial_stiffness \(EA\)"),
     (dict(bending_stiffness=-1.0), r"bending_stiffness \(EI\)"),
     (dict(youngs_modulus=0.0), r"youngs_modulus \(E\)"),
+    (dict(fibre_distance=-0.01), r"fibre_distance must be a finite number > 0"),
 ])
 def test_section_from_stiffness_rejects_bad_input(bad, match):
     args = dict(axial_stiffness=E * A, bending_stiffness=E * I, mass_per_length=RHO_A) | bad
@@ -290,6 +298,29 @@ def test_scenario_with_the_exudyn_items(tmp_path):
     assert phi[5] == pytest.approx(-0.02, rel=1e-15)  # node 1 starts at y = 0, f(2) = 0.02
 
 
+def test_docs_scenario_file_is_the_python_port(tmp_path):
+    """The scenario file of docs/exudyn.md ("One model, side by side") builds the system
+    and initial state of the page's Python port (benchmarks/exudyn_port.py, whose run
+    against Exudyn is the page's measured figure) exactly, and its solver table gives
+    the port's step, span, output interval and ρ∞ (no run: compiling the port costs
+    ~9 s; ``python -m benchmarks.exudyn_port`` runs both codes)."""
+    import re
+    from pathlib import Path
+    from ancf_jax.scenario import load_scenario
+    from benchmarks import exudyn_port as port
+    page = (Path(__file__).resolve().parents[1] / "docs" / "exudyn.md").read_text(encoding="utf-8")
+    block = re.search(r"### scenario file\s+```toml\n(.*?)```", page, re.S).group(1)
+    (tmp_path / "port.toml").write_text(block)
+    scenario = load_scenario(str(tmp_path / "port.toml"))
+    system, state = scenario.model().build(assemble=False)
+    ported, ported_state = port.ancf_model().build(assemble=False)
+    assert bool(eqx.tree_equal(system, ported)) and bool(eqx.tree_equal(state, ported_state))
+    kw = scenario.solver.simulate_kwargs()
+    assert (kw["t_end"], kw["dt"], kw["output_dt"], float(kw["solver"].rho_inf)) == (port.T_END, port.H, 0.01, 0.9)
+    different = load_scenario(str(tmp_path / "port.toml"), overrides=["beams.cable.elements=7"])
+    assert not bool(eqx.tree_equal(different.model().build(assemble=False)[0], ported))  # the check can fail
+
+
 # ----------------------------------------------------------------------------- 4. CSV precision
 def test_csv_round_trips_doubles_by_default(tmp_path):
     """Default: every value reads back to the same double; ``precision`` digits otherwise."""
@@ -396,28 +427,92 @@ def test_strain_rate_damping_dissipates_d_eps_dot_squared():
     assert float(beam.strain_energy(deformed)) == float(plain.strain_energy(deformed))
 
 
-def test_rate_law_newton_matrix_is_the_derivative_of_the_forces():
-    """element_tangent of a beam with strain-rate laws equals central differences of the
-    element's resisting force ∂U/∂e + f_d(e, ė) along (δe, c_v δe) (relative 1e-7)."""
+def _assert_tangent_is_the_derivative_of_the_forces(beam, seed):
+    """element_tangent of a one-element beam with rate laws equals central differences
+    of the element's resisting force ∂U/∂e + f_d(e, ė) along (δe, c_v δe) (relative 1e-7)."""
     from ancf_jax.element.strain_energy import dissipative_force, strain_energy
-    beam = _damped_beam(n=1)
-    nodes = _deformed(beam, 3)
-    vel = jnp.asarray(np.random.default_rng(4).standard_normal(nodes.shape))
+    nodes = _deformed(beam, seed)
+    vel = jnp.asarray(np.random.default_rng(seed + 1).standard_normal(nodes.shape))
     c_v = 40.0
     k = np.asarray(eqx.filter_jit(lambda b: b.element_tangent(nodes, vel, c_v))(beam))[0]
     e, ed = jnp.ravel(nodes), jnp.ravel(vel)
     er, l = beam.mesh.reference_elements[0], beam.mesh.element_lengths[0]
     ea, ei = beam.section.axial_stiffness, beam.section.bending_stiffness
+    f = beam.formulation
 
     @eqx.filter_jit
     def force(x, xd):
-        return (jax.grad(strain_energy)(x, er, l, ea, ei, ENGINEERING, beam.axial_law, beam.bending_law)
-                + dissipative_force(x, xd, er, l, ea, ei, ENGINEERING, beam.axial_law, beam.bending_law))
+        return (jax.grad(strain_energy)(x, er, l, ea, ei, f, beam.axial_law, beam.bending_law)
+                + dissipative_force(x, xd, er, l, ea, ei, f, beam.axial_law, beam.bending_law))
 
     h = 1e-6
     fd = np.stack([(np.asarray(force(e + h * d, ed + c_v * h * d)) - np.asarray(force(e - h * d, ed - c_v * h * d)))
                    / (2 * h) for d in np.eye(8)], axis=1)
     np.testing.assert_allclose(k, fd, rtol=0, atol=1e-7 * np.abs(k).max())
+
+
+def test_rate_law_newton_matrix_is_the_derivative_of_the_forces():
+    """The strain-rate damped laws: element_tangent against central differences."""
+    _assert_tangent_is_the_derivative_of_the_forces(_damped_beam(n=1), 3)
+
+
+def test_user_law_of_the_linear_energy_is_the_default_law():
+    """``UserLaw(½ k γ²)`` on both parts is the default (no law): elastic force and
+    element stiffness equal to round-off (that the user's function is what is used is
+    shown by the closed form of the next test)."""
+    m = mesh.straight((0, 0), (1, 0), 1.0, 2)
+    section = Section.from_stiffness(EA_C, EI_C, 0.1)
+    linear = laws.UserLaw(lambda g, k: 0.5 * k * g**2)
+    default = Beam(m, section)
+    user = Beam(m, section, axial_law=linear, bending_law=linear)
+    nodes = _deformed(default, 11)
+    terms = eqx.filter_jit(lambda b: (b.elastic_force(nodes), b.element_tangent(nodes, jnp.zeros_like(nodes), 0.0)))
+    f0, k0 = (np.asarray(x) for x in terms(default))
+    f1, k1 = (np.asarray(x) for x in terms(user))
+    assert not user.has_rate_law
+    np.testing.assert_allclose(f1, f0, rtol=0, atol=1e-14 * np.abs(f0).max())
+    np.testing.assert_allclose(k1, k0, rtol=0, atol=1e-14 * np.abs(k0).max())
+
+
+def _hardening_user_law():
+    """W = ½ k γ² (1 + c γ²) and N_d = d γ̇ (1 + b γ²): a nonlinear elastic part and a
+    rate part that depends on the strain too."""
+    c, d, b = 2.0e3, 5.0, 4.0e2
+    law = laws.UserLaw(lambda g, k: 0.5 * k * g**2 * (1.0 + c * g**2),
+                       lambda g, gd, k: d * gd * (1.0 + b * g**2))
+    return law, (c, d, b)
+
+
+def test_user_law_with_a_rate_term_forces_and_newton_matrix():
+    """A nonlinear UserLaw with a rate term on the axial part: under a uniform stretch ε
+    of a straight bar (r' = (1 + ε, 0)) the elastic force at the free end is
+    N = W'(ε) = k ε (1 + 2 c ε²) (a bar of one element: the force at node 1 is N e_x)
+    and the power dissipated under a uniform stretching rate ε̇ is N_d(ε, ε̇) ε̇ L
+    (closed forms); on a randomly deformed and moving element the elastic force equals
+    central differences of the strain energy and element_tangent equals central
+    differences of the resisting force ∂U/∂e + f_d (relative 1e-7)."""
+    law, (c, d, b) = _hardening_user_law()
+    beam = Beam(mesh.straight((0, 0), (1, 0), L_C, 1), Section.from_stiffness(EA_C, EI_C, 0.1),
+                formulation=ENGINEERING, axial_law=law)
+    assert beam.has_rate_law
+    x = np.asarray(beam.mesh.reference_nodes)[:, 0]
+    eps, rate = 3e-3, 0.7
+    stretched = jnp.asarray(np.stack([(1 + eps) * x, 0 * x, 1 + eps + 0 * x, 0 * x], axis=1))
+    moving = jnp.asarray(np.stack([rate * x, 0 * x, rate + 0 * x, 0 * x], axis=1))
+    force, power = eqx.filter_jit(lambda bm, n, v: (bm.elastic_force(n), -jnp.sum(v * bm.dissipative_force(n, v))))(
+        beam, stretched, moving)
+    n_closed = EA_C * eps * (1.0 + 2.0 * c * eps**2)
+    assert -float(force[1, 0]) == pytest.approx(n_closed, rel=1e-12)  # elastic_force is −∂U/∂q
+    assert float(power) == pytest.approx(d * rate * (1.0 + b * eps**2) * rate * L_C, rel=1e-12)
+
+    nodes = _deformed(beam, 5)
+    f = np.asarray(eqx.filter_jit(lambda bm: bm.elastic_force(nodes))(beam)).ravel()
+    energy = eqx.filter_jit(lambda bm, n: bm.strain_energy(n))
+    h = 1e-6
+    fd = np.array([(float(energy(beam, nodes + h * dn)) - float(energy(beam, nodes - h * dn))) / (2 * h)
+                   for dn in np.eye(8).reshape(8, 2, 4)])
+    np.testing.assert_allclose(f, -fd, rtol=0, atol=1e-7 * np.abs(f).max())  # elastic_force is −∂U/∂q
+    _assert_tangent_is_the_derivative_of_the_forces(beam, 5)
 
 
 # ----------------------------------------------------------------------------- 6. metric, meshes of given nodes
