@@ -363,6 +363,40 @@ def test_contact_outputs_gap_force_and_loss_of_contact(bounce_runs):
         assert (closed[-1] > pushing[-1]) == (zeta > 0)
 
 
+def test_default_contact_stiffness_from_the_beam():
+    """Without a stiffness, a contact gets CONTACT_STIFFNESS_FACTOR (100) times the
+    static stiffness of the beam where its point touches it: on a cantilever (EI =
+    2000 N·m², 2 elements, clamped at x = 0) under a ball at a = 0.5 m, 100 · 3 EI / a³
+    (the cubic elements give the nodal deflection exactly: measured 1e-14). On a beam
+    clamped at every node (rigid: k_b infinite) there is no such default: one-line
+    ModelError naming the contact's stiffness (likewise on a beam not held at all,
+    k_b = 0: one more compile, left out for time). (On the taut string of
+    pantograph_model the derived k_b converges to T ℓ / (x (ℓ − x)) at first order, the
+    load's kink being smeared by the C¹ elements: 5.9 %, 2.7 %, 1.4 % at 8, 16, 32
+    elements.)"""
+    from ancf_jax.errors import ModelError
+    from ancf_jax.model import CONTACT_STIFFNESS_FACTOR
+
+    ei = 2e3
+
+    def cantilever(clamped):
+        m = Model(gravity=(0.0, -9.81))
+        m.add_beam("arm", mesh.straight((0.0, 0.0), (1.0, 0.0), 1.0, 2), Section(2e11, 1e-4, ei / 2e11, 1.0))
+        for i in clamped:
+            m.clamp(f"c{i}", "arm", i)
+        m.add_point_mass("ball", mass=1.0, position=(0.5, 0.0))
+        m.contact("touch", body_point("ball"), "arm")
+        return m
+
+    system, _ = cantilever([0]).build(assemble=False)  # built consistent, at rest
+    assert CONTACT_STIFFNESS_FACTOR == 100.0
+    assert float(system.forces[0].stiffness) == pytest.approx(100.0 * 3 * ei / 0.5**3, rel=1e-12)
+    with pytest.raises(ModelError, match=r"^stiffness of contact 'touch' has no default: .* static stiffness "
+                       r"there is inf N/m: the model holds it rigidly\); give stiffness \[N/m\] > 0") as err:
+        cantilever([0, 1, 2]).build()
+    assert "\n" not in str(err.value)
+
+
 # ---------------------------------------------------------------------------- gradients
 def pantograph_model():
     """A one-mass current collector (0.1 kg, uplift 1 N, gravity off) under the string
