@@ -162,6 +162,21 @@ def _closest(system, beam: int, q, p):
     return s_k + u, on, e, u, length, raw
 
 
+def _left_normal(e, u, length):
+    """The beam's unit left normal n̂ at local arc length u of the element with
+    coordinates e (4, 2)."""
+    r1 = shape_functions_dx(u, length) @ e
+    return jnp.stack([-r1[1], r1[0]]) / jnp.linalg.norm(r1)
+
+
+def material_point_load(system, beam: int, q, s, force):
+    """Generalized force S(s)ᵀF of a force F [N] (2,) on the material point of beam
+    ``beam`` at reference arc length s [m] (held fixed), shape (n,)."""
+    b = system.beams[beam]
+    _, vjp = jax.vjp(lambda qq: b.position(system.beam_nodes(qq, beam), s), q)
+    return vjp(force)[0]
+
+
 def node_crossing_value(mesh, s):
     """(−1)ᵏ f (1 − f) with ξ = k + f the global element coordinate of the reference arc
     length s [m] (k the element holding s, f = (s − s_k)/l_k ∈ [0, 1); beyond the ends
@@ -245,9 +260,7 @@ class MovingForce(AbstractLoad, AbstractNodeCrossing):
     def applied_force(self, system, q, v, t):
         s, on = self.location.locate(system, self.beam, q, t)
         f = self.force if self.time_function is None else self.force * self.time_function(t)
-        beam = system.beams[self.beam]
-        _, vjp = jax.vjp(lambda qq: beam.position(system.beam_nodes(qq, self.beam), s), q)
-        return vjp(jnp.where(on, f, 0.0))[0]
+        return material_point_load(system, self.beam, q, s, jnp.where(on, f, 0.0))
 
     def coordinates(self, system, q, t):
         s, _ = self.location.locate(system, self.beam, q, t)
@@ -318,9 +331,15 @@ class UnilateralContact(AbstractKinkedForce, AbstractNodeCrossing):
         beam."""
         p = self.point.position(system, q)
         _, on, e, u, length, raw = _closest(system, self.beam, q, p)
-        r1 = shape_functions_dx(u, length) @ e
-        n = jnp.stack([-r1[1], r1[0]]) / jnp.linalg.norm(r1)
+        n = _left_normal(e, u, length)
         return self.side * jnp.dot(n, p - shape_functions(u, length) @ e) - self.offset, on, raw
+
+    def unit_normal_load(self, system, q):
+        """Generalized force of a unit force σ n̂ [N] on the beam's material point at the
+        closest point s* (the force the contact's point would exert on the beam pushed
+        into it), shape (n,): the load of :func:`ancf_jax.modal.contact_point_stiffness`."""
+        s, _, e, u, length, _ = _closest(system, self.beam, q, self.point.position(system, q))
+        return -material_point_load(system, self.beam, q, s, self.side * _left_normal(e, u, length))
 
     def gap(self, system, q):
         """g = σ n̂·(p − r(s*)) − g₀ [m] (negative: penetration), whether or not s* is

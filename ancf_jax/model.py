@@ -117,6 +117,11 @@ CLAMP_MODES = ("full", "direction", "exudyn")
 #: where a moving load's path is measured: horizontal coordinate or reference arc length
 ALONG = ("x", "arc_length")
 
+#: a contact's default stiffness over the beam's static stiffness where it touches
+#: (:meth:`Model.contact`): the contact spring in series adds 1/100 to the beam's
+#: compliance there (its penetration is 1 % of the beam's deflection under the same force)
+CONTACT_STIFFNESS_FACTOR = 100.0
+
 
 def _as_path(what: str, path) -> AbstractPath:
     """A path: an AbstractPath as is; a function of t as ``ConstantSpeed(0, 0, f)``."""
@@ -683,7 +688,7 @@ class Model:
             self.prescribe_body(f"{name}.drive", name, "x", p)
         return name
 
-    def contact(self, name: str, point: PointRef, beam: str, *, stiffness, damping=0.0, side: int = 1,
+    def contact(self, name: str, point: PointRef, beam: str, *, stiffness=None, damping=0.0, side: int = 1,
                 offset=0.0, mu=0.0, regularization=DEFAULT_REGULARIZATION, viscous=0.0) -> str:
         """Unilateral penalty contact between ``point`` and ``beam`` at the beam's
         closest point (:class:`~ancf_jax.contact.UnilateralContact`): normal force
@@ -693,7 +698,15 @@ class Model:
         :meth:`slider_friction`).
 
         Args:
-            stiffness: k [N/m] > 0.
+            stiffness: k [N/m] > 0; None (default): :data:`CONTACT_STIFFNESS_FACTOR`
+                (100) times the static stiffness of the beam where the point touches
+                it, k_b = F / w for a normal point force F there, supports and joints
+                included, in the built configuration
+                (:func:`~ancf_jax.modal.contact_point_stiffness`), set by
+                :meth:`build`: the contact then adds 1 % to the beam's compliance
+                there (docs/moving-loads.md, "Contact stiffness"). A beam held rigidly
+                there (every node clamped) or not held at all has no such default:
+                :meth:`build` raises.
             damping: c [N·s/m] >= 0.
             side: +1 if the point is on the side of the beam's left normal (above a
                 beam running in +x), −1 if on the other side (below it: a pantograph
@@ -703,7 +716,7 @@ class Model:
             regularization: v_ε [m/s] > 0 of the friction (default 1e-3).
             viscous: c [N·s/m] >= 0, viscous friction along the beam.
         """
-        k = check_positive(f"stiffness of contact {name!r}", stiffness, "N/m")
+        k = None if stiffness is None else check_positive(f"stiffness of contact {name!r}", stiffness, "N/m")
         c = check_nonnegative(f"damping of contact {name!r}", damping, "N*s/m")
         g0 = check_nonnegative(f"offset of contact {name!r}", offset, "m")
         mu = check_nonnegative(f"mu of contact {name!r}", mu)
@@ -717,6 +730,27 @@ class Model:
         self._forces.append(("contact", name, dict(point=point, beam=beam, stiffness=k, damping=c,
                                                    side=float(side), offset=g0, friction=friction)))
         return name
+
+    def _default_contact_stiffness(self, system: System, q) -> System:
+        """``system`` with the stiffness of every contact added without one set to
+        CONTACT_STIFFNESS_FACTOR k_b (:meth:`contact`)."""
+        from .modal import contact_point_stiffness
+
+        for kind, name, a in self._forces:
+            if kind != "contact" or a["stiffness"] is not None:
+                continue
+            i = next(i for i, f in enumerate(system.forces) if f.name == name)
+            kb = contact_point_stiffness(system, q, system.forces[i])
+            if not 0.0 < kb < np.inf:
+                held = "holds it rigidly" if kb == np.inf else "does not hold it"
+                raise ModelError(
+                    f"stiffness of contact {name!r} has no default: nothing derives one where beam "
+                    f"{a['beam']!r} meets the point (its static stiffness there is {kb:g} N/m: the model {held}); "
+                    f"give stiffness [N/m] > 0, e.g. the expected contact force over the penetration "
+                    f"you accept (docs/moving-loads.md, \"Contact stiffness\")")
+            system = eqx.tree_at(lambda s: s.forces[i].stiffness, system,
+                                 jnp.asarray(CONTACT_STIFFNESS_FACTOR * kb, float))
+        return system
 
     def lumped_chain(self, name: str, *, base, heights, masses, stiffness, damping=None,
                      forces=None, path=None, gravity: bool = True) -> tuple[str, ...]:
@@ -1159,7 +1193,8 @@ class Model:
             elif kind == "contact":
                 fr = a["friction"]
                 forces.append(UnilateralContact(
-                    name, resolve(a["point"], what), beam_of(a["beam"]), a["side"], jnp.asarray(a["stiffness"], float),
+                    name, resolve(a["point"], what), beam_of(a["beam"]), a["side"],
+                    jnp.asarray(0.0 if a["stiffness"] is None else a["stiffness"], float),
                     jnp.asarray(a["damping"], float), jnp.asarray(a["offset"], float),
                     None if fr is None else ContactFriction(*(jnp.asarray(fr[k], float)
                                                               for k in ("mu", "regularization", "viscous")))))
@@ -1193,6 +1228,7 @@ class Model:
                         sliding_names=tuple(slider_names), gravity_off=gravity_off,
                         reaction_forces=reaction_forces)
         system = chain_structure(system, jnp.asarray(q0), layout)
+        system = self._default_contact_stiffness(system, jnp.asarray(q0))
         v0 = np.asarray(system.pack(body_vel, vel0, s_rate))
         state = State(jnp.asarray(q0), jnp.asarray(v0), jnp.zeros(()))
         if assemble:

@@ -448,7 +448,9 @@ class ContactSpec(Table):
     type: Literal["contact"] = key(doc="load type")
     point: PointRef = key(doc="the contacting point (e.g. the head of a chain: { body = \"pan.2\" })")
     beam: str = key(doc="beam name")
-    stiffness: float = key(unit="N/m", gt=0.0, allow_inf_nan=False, doc="penalty stiffness k")
+    stiffness: Optional[float] = key(None, unit="N/m", gt=0.0, allow_inf_nan=False,
+                                     doc="penalty stiffness k (default: 100 times the beam's static stiffness "
+                                         "where the point touches it, docs/moving-loads.md)")
     damping: float = key(0.0, unit="N·s/m", ge=0.0, allow_inf_nan=False, doc="c")
     side: Side = key(1, doc="the side of the beam the point is on: 1 on the side of the left normal "
                             "(above a beam running in +x), -1 the other (below: a pantograph under a wire)")
