@@ -130,6 +130,24 @@ def test_rope_slack_and_taut_phases(rope_runs):
         _, run = rope_runs[c, 0.0005]
         ref = rope_reference(c, run.t)
         assert np.max(np.abs(run.q[:, 1] - ref)) < 2e-4
+    # the member output (Results.member, output kind "member") of the damped rope: the
+    # law k e + max(c ℓ̇, −k e) while taut evaluated here from ℓ = |r|, ℓ̇ = r·v/ℓ of
+    # the body's state, exactly 0 and disengaged while slack
+    system, run = rope_runs[2.0, 0.0005]
+    results = Results(system, run.t, run.q, run.v, run.acc, run.lam, run.work, np.zeros(len(run.t)))
+    member = results.member("rope")
+    ell = np.linalg.norm(run.q[:, :2], axis=1)
+    e, ell_dot = ell - L_ROPE, np.sum(run.q[:, :2] * run.v[:, :2], axis=1) / ell
+    taut = e > 0
+    assert 0 < taut.sum() < len(taut)  # both phases
+    np.testing.assert_array_equal(member[:, 1], taut.astype(float))
+    assert np.all(member[~taut, 0] == 0.0) and np.all(member[:, 0] >= 0.0)
+    law = K_ROPE * e + np.maximum(2.0 * ell_dot, -K_ROPE * e)
+    np.testing.assert_allclose(member[taut, 0], law[taut], rtol=1e-12, atol=1e-9)
+    assert np.max(member[:, 0]) > 4.0 * M_ROPE * G  # the bounce pulls hard (measured 47 N)
+    cols = evaluate(results, [Output("r", "member", "rope"), Output("on", "member", "rope", "engaged")])
+    np.testing.assert_array_equal(cols["r"], member[:, 0])
+    np.testing.assert_array_equal(cols["on"], member[:, 1])
 
 
 def test_rope_energy_balance_step_halving(rope_runs):
