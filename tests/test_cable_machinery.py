@@ -8,11 +8,12 @@ study; a clamp mass's kinetic energy, weight and the frequency of a taut string 
 central mass (z tan z = ρL/M, with a convergence study); a body on a frictional incline
 that creeps at v_ε artanh(F/μN) or slides at g (sin β − μ cos β); trolleys hauled at
 constant speed by a prescribed arc length, a servo and a pull against the closed-form
-resistance; the Newton matrix with ∂Q/∂λ against a dense jacfwd; gradients through
-friction and a drive against finite differences.
+resistance; the same slide on a taut inclined cable within its kink bound; the Newton
+matrix with ∂Q/∂λ against a dense jacfwd; gradients through friction (Coulomb and
+viscous) and every drive kind against finite differences and closed forms.
 
 Compiled programs are shared: the rope runs (h is data), the incline runs (tan β is
-data), one three-trolley run, one gradient program.
+data), one three-trolley run, one taut-cable run, one gradient program.
 """
 
 import functools

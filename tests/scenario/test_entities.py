@@ -207,15 +207,9 @@ geometry = { type = "straight", start = [0.0, 0.0], direction = [1.0, 0.0], leng
 elements = 2
 section = { E = 2e11, A = 1e-4, I = 1e-9, density = 7800.0 }
 
-[bodies.pulled]
-mass = 1.0
-inertia = 0.1
-at = { beam = "rail", s = 0.5 }
-
-[bodies.servoed]
-mass = 2.0
-inertia = 0.1
-at = { beam = "rail", s = 1.5 }
+[bodies]
+pulled = { mass = 1.0, inertia = 0.1, at = { beam = "rail", s = 0.5 } }
+servoed = { mass = 2.0, inertia = 0.1, at = { beam = "rail", s = 1.5 } }
 
 [joints.clamp]
 type = "clamp"
