@@ -28,19 +28,20 @@ with 8 ℓ legs); it is measured from the direction of the drawing force and the
 closed forms are evaluated at it, with equal turns per eyelet.
 
 Run: ``python -m benchmarks.eyelets`` (n = 1, 4, 16; about 6 minutes, n = 16 is 544
-elements); writes ``results/eyelets.json`` and prints the table of docs/cable-machinery.md.
+elements); writes ``benchmarks/results/eyelets.{json,md}`` (the table of
+docs/cable-machinery.md) and prints the table.
 """
 
 from __future__ import annotations
 
-import json
-import pathlib
 import sys
 import time
 
 import jax.numpy as jnp
 import numpy as np
 from scipy.optimize import brentq
+
+from .common import write
 
 MU, PHI, T_LOAD, SPEED, RAMP, V_EPS = 0.2, np.pi / 2, 100.0, 0.1, 0.05, 1e-2
 EA, RHOA, ELL = 6.3e5, 0.025, 0.05
@@ -145,15 +146,15 @@ def eyelet_run(n: int, *, dt: float = 1e-3, t_end: float = 0.3, window: float = 
 
 def main(counts=(1, 4, 16)) -> list[dict]:
     rows = [eyelet_run(n) for n in counts]
-    out = pathlib.Path("results")
-    out.mkdir(exist_ok=True)
-    (out / "eyelets.json").write_text(json.dumps(rows, indent=1))
-    print("| n | elements | turn [rad] | T₂/T₁ simulated | rod, point eyelets | string, point eyelets "
-          "| capstan e^(μθ) | run [s] |")
-    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    lines = ["| n | elements | turn [rad] | T₂/T₁ simulated | rod, point eyelets | string, point eyelets "
+             "| capstan e^(μθ) | run [s] |", "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for r in rows:
-        print(f"| {r['n']} | {r['elements']} | {r['turn']:.4f} | {r['ratio']:.5f} | {r['rod']:.5f} "
-              f"| {r['string']:.5f} | {r['capstan']:.5f} | {r['seconds']:.0f} |")
+        lines.append(f"| {r['n']} | {r['elements']} | {r['turn']:.4f} | {r['ratio']:.5f} | {r['rod']:.5f} "
+                     f"| {r['string']:.5f} | {r['capstan']:.5f} | {r['seconds']:.0f} |")
+    md = "\n".join(lines) + "\n"
+    path = write("eyelets", dict(runs=rows), md)
+    print(md)
+    print(f"written {path}")
     return rows
 
 

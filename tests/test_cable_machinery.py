@@ -8,11 +8,12 @@ study; a clamp mass's kinetic energy, weight and the frequency of a taut string 
 central mass (z tan z = ρL/M, with a convergence study); a body on a frictional incline
 that creeps at v_ε artanh(F/μN) or slides at g (sin β − μ cos β); trolleys hauled at
 constant speed by a prescribed arc length, a servo and a pull against the closed-form
-resistance; the Newton matrix with ∂Q/∂λ against a dense jacfwd; gradients through
-friction and a drive against finite differences.
+resistance; the same slide on a taut inclined cable within its kink bound; the Newton
+matrix with ∂Q/∂λ against a dense jacfwd; gradients through friction (Coulomb and
+viscous) and every drive kind against finite differences and closed forms.
 
 Compiled programs are shared: the rope runs (h is data), the incline runs (tan β is
-data), one three-trolley run, one gradient program.
+data), one three-trolley run, one taut-cable run, one gradient program.
 """
 
 import functools
@@ -130,6 +131,24 @@ def test_rope_slack_and_taut_phases(rope_runs):
         _, run = rope_runs[c, 0.0005]
         ref = rope_reference(c, run.t)
         assert np.max(np.abs(run.q[:, 1] - ref)) < 2e-4
+    # the member output (Results.member, output kind "member") of the damped rope: the
+    # law k e + max(c ℓ̇, −k e) while taut evaluated here from ℓ = |r|, ℓ̇ = r·v/ℓ of
+    # the body's state, exactly 0 and disengaged while slack
+    system, run = rope_runs[2.0, 0.0005]
+    results = Results(system, run.t, run.q, run.v, run.acc, run.lam, run.work, np.zeros(len(run.t)))
+    member = results.member("rope")
+    ell = np.linalg.norm(run.q[:, :2], axis=1)
+    e, ell_dot = ell - L_ROPE, np.sum(run.q[:, :2] * run.v[:, :2], axis=1) / ell
+    taut = e > 0
+    assert 0 < taut.sum() < len(taut)  # both phases
+    np.testing.assert_array_equal(member[:, 1], taut.astype(float))
+    assert np.all(member[~taut, 0] == 0.0) and np.all(member[:, 0] >= 0.0)
+    law = K_ROPE * e + np.maximum(2.0 * ell_dot, -K_ROPE * e)
+    np.testing.assert_allclose(member[taut, 0], law[taut], rtol=1e-12, atol=1e-9)
+    assert np.max(member[:, 0]) > 4.0 * M_ROPE * G  # the bounce pulls hard (measured 47 N)
+    cols = evaluate(results, [Output("r", "member", "rope"), Output("on", "member", "rope", "engaged")])
+    np.testing.assert_array_equal(cols["r"], member[:, 0])
+    np.testing.assert_array_equal(cols["on"], member[:, 1])
 
 
 def test_rope_energy_balance_step_halving(rope_runs):
@@ -325,6 +344,46 @@ def test_friction_slides_above_the_limit(incline_runs):
     assert run.work[-1, 0] == pytest.approx(0.5108, abs=2e-3)
 
 
+def test_friction_slides_on_a_taut_inclined_cable():
+    """tan β = 2μ on a straight taut cable instead of a rigid track: 2 m, 8 elements,
+    EA = 2.1e7 N, EI 1e-9 N·m², ρA = 0.1 kg/m, pinned at both ends and stretched by
+    0.4 % (tension T = 84.5 kN), stiffness-proportional damping 1e-4 s (its vibration,
+    excited by the body dropped on the straight cable, otherwise swings the
+    step-to-step acceleration by ±100 %). The body (1 kg, from rest) deflects the cable
+    by a kink of angle δ = N/T = 1.0e-4 (N = m g cos β) and the cable's weight by
+    δ_c = ρA g L cos β/(2T) = 1.0e-5 at most, so the slope under the body differs from
+    the chord's by at most δ + δ_c, which moves the closed form a = g (sin β − μ cos β)
+    by at most (δ + δ_c) (cos β + μ sin β)/(sin β − μ cos β) = 4.3e-4 relative.
+    Measured: the physical acceleration |r'| s̈ (least-squares slope of the speed over
+    0.1-0.3 s) is 2.6e-4 above it (the same over 0.2-0.3 s); s̈ alone, without the
+    stretch |r'| = 1.004, is 3.7e-3 off."""
+    n, stretch, rhoa = 8, 1.004, 0.1
+    beta = np.arctan(2 * MU)
+    track = mesh.straight((0.0, 0.0), (np.cos(beta), -np.sin(beta)), 2.0, n)  # +s: downhill
+    nodes = np.asarray(track.reference_nodes)[: n + 1] * stretch  # positions and slopes: uniform stretch
+    m = Model(gravity=(0.0, -G))
+    m.add_beam("track", track, Section(2.1e11, 1e-4, 1e-9, rhoa), initial_nodes=nodes, beta=1e-4)
+    m.pin("a", node("track", 0))
+    m.pin("b", node("track", -1))
+    m.add_body("slider_body", mass=1.0, inertia=0.1, position=stretch * S_START * np.array([np.cos(beta), -np.sin(beta)]))
+    m.slider("slider", "slider_body", "track", S_START)
+    m.slider_friction("friction", "slider", mu=MU)
+    system, state = m.build()
+    run = run_fixed(system, state, GeneralizedAlpha().forward_only(), 0.001, 0.3, chunk=100)
+    assert run.status == 0
+    tension = 2.1e7 * 0.5 * (stretch**2 - 1.0) * stretch  # Green-Lagrange: EA ε |r'|
+    kink = G * np.cos(beta) / tension + rhoa * G * 2.0 * np.cos(beta) / (2 * tension)
+    a0 = G * (np.sin(beta) - MU * np.cos(beta))
+    bound = kink * (np.cos(beta) + MU * np.sin(beta)) / (np.sin(beta) - MU * np.cos(beta))
+    assert 4e-4 < bound < 5e-4
+    u = stretch * run.v[:, system.sliding_offset]  # |r'| ṡ: the cable's strain from the load is ~1e-7
+    for t0 in (0.1, 0.2):
+        late = run.t >= t0
+        a = np.polyfit(run.t[late], u[late], 1)[0]
+        assert abs(a / a0 - 1.0) < bound, (t0, a / a0 - 1.0)
+        assert abs(a / stretch / a0 - 1.0) > 5 * bound  # s̈ is not the acceleration
+
+
 U_DRIVE, F_PULL, T_DRIVE = 0.5, 10.0, 0.3
 SERVO_GAIN, SERVO_MAX = 2000.0, 50.0
 
@@ -507,46 +566,100 @@ def test_newton_matrix_holds_the_friction_linearization(incline_runs):
     assert np.linalg.norm(np.asarray(reference)[row, cols] - r1) > 0.1
 
 
-def test_gradients_through_friction_and_drive():
-    """d s(T)/d(μ, F) of a trolley pulled by a drive force F on a frictional incline
-    (tan β = 2μ, from rest: through the regularization transient), forward mode through
-    the implicit generalized-α steps, against central finite differences.
+def test_gradients_through_friction_and_drives():
+    """Derivatives through every drive kind and both parts of the friction law, forward
+    mode through the implicit generalized-α steps (0.05 s, h = 1 ms), against central
+    finite differences and closed forms. One rigid incline (tan β = 2μ, +s downhill)
+    carries two trolleys (1 kg) with friction μ:
+
+    * "a" pulled uphill by a drive force F from rest (through the regularization
+      transient): d s_a(T)/d(μ, F), near ½ T² (−N, 1/m) of the saturated motion;
+    * "c" hauled uphill at constant speed U = 0.3 m/s by a prescribed arc length
+      s = s₀ − U t (a ``ConstantSpeed`` path: U is data; c's initial velocity is U),
+      with a viscous part c = 4 N·s/m in its friction and a velocity servo to
+      u* = −0.2 m/s (gain k = 200 N·s/m, limit F_max = 20 N) holding it back: its drive
+      force is the closed form F_c = −(m g (sin β + μ cos β) + c U + F_s), with the
+      servo's F_s = F_max tanh(x), x = k (u* + U)/F_max (tanh(U/v_ε) = 1 to 1e-170).
+      d F_c/d(U, c, k, F_max) = −(c + k sech²x, U, sech²x (u* + U), tanh x − x sech²x).
 
     Newton's tolerance is 1e-12 here: at the default 1e-10 the computed map s(p) differs
     from the exact-root map whose derivative the JVP gives (implicit differentiation) by
     ~8e-7 relative in its slope, and differences over steps under 1e-5 see the Newton
-    noise (measured, steps 1e-7 to 1e-3). At 1e-12, steps 1e-4: agreement 1e-9 (μ) and
-    2e-9 (F); the step-1e-3 differences are 3e-8 off (truncation, O(h²))."""
+    noise (measured, steps 1e-7 to 1e-3). At 1e-12, relative steps 1e-4: agreement
+    1e-9 (μ) and 2e-9 (F) for "a" (the step-1e-3 differences are 3e-8 off: truncation,
+    O(h²)). F_c is a multiplier, resolved by Newton to ~1e-8 of its 25 N beside the
+    track's clamp reactions: its differences take relative steps of 1e-2 (0.25 in c,
+    in which F_c is linear), their truncation error (measured 2e-4 in U) removed by
+    Richardson extrapolation with doubled steps; what is left is that noise over the
+    step, measured 1.8e-7 (U), 1.1e-6 (k), 3.8e-7 (F_max) relative, hence 3e-6. The
+    closed forms check F_c to 1e-9 and its JVPs to 2e-8 (measured 7e-9: the same
+    Newton tolerance)."""
+    from ancf_jax.functions import ConstantSpeed
     from ancf_jax.simulation import trajectory
 
     beta = np.arctan(2 * MU)
     track = mesh.straight((0.0, 0.0), (np.cos(beta), -np.sin(beta)), 2.0, 2)
-    m = track_model(track, 0.5, clamp_nodes="all")
-    m.slider_friction("friction", "slider", mu=MU)
-    m.slider_drive("pull", "slider", force=-1.0)
+    m = Model(gravity=(0.0, -G))
+    m.add_beam("track", track, Section(2.1e11, 1e-4, 1e-9, 0.785))
+    for i in range(3):
+        m.clamp(f"clamp{i}", "track", i)
+    t_hat = np.array([np.cos(beta), -np.sin(beta)])
+    speed, viscous, target, gain, limit = 0.3, 4.0, -0.2, 200.0, 20.0
+    for name, s0, rate in (("a", 0.5, 0.0), ("c", 1.5, -speed)):
+        m.add_body(name, mass=1.0, inertia=0.1, position=s0 * t_hat, velocity=rate * t_hat)
+        m.slider(f"s{name}", name, "track", s0, rate=rate)
+        m.slider_friction(f"friction_{name}", f"s{name}", mu=MU, viscous=viscous if name == "c" else 0.0)
+    m.slider_drive("pull", "sa", force=-1.0)
+    m.slider_drive("haul", "sc", position=ConstantSpeed(1.5, -speed))
+    m.slider_drive("servo", "sc", speed=target, gain=gain, max_force=limit)
     system, state = m.build()
+    o = system.sliding_offset
+    haul = [c.name for c in system.constraints].index("haul")
+    # c's initial velocity (its body's and ṡ) is linear in U
+    moving_c = np.zeros(system.n_coordinates)
+    moving_c[[system.body_offset(1), system.body_offset(1) + 1, o + 1]] = 1.0
 
-    def final_s(p):
-        sys = eqx.tree_at(lambda s: (s.reaction_forces[0].mu, s.forces[0].force), system, (p[0], p[1]))
-        seg, _ = trajectory(sys, state, GeneralizedAlpha(root_finder=ModifiedNewton(tolerance=1e-12)),
-                            t_end=0.05, dt=0.001)
-        return seg.q[-1, sys.sliding_offset]
+    def final(p):
+        """(s_a(T), F_c(T)) at p = (μ_a, F, U, c, k, F_max)."""
+        sys = eqx.tree_at(lambda s: (s.reaction_forces[0].mu, s.forces[0].force, s.constraints[haul].path.speed,
+                                     s.reaction_forces[1].viscous, s.forces[1].gain, s.forces[1].max_force),
+                          system, (p[0], p[1], -p[2], p[3], p[4], p[5]))
+        v0 = state.v * (1.0 + moving_c * (p[2] / speed - 1.0))
+        seg, _ = trajectory(sys, eqx.tree_at(lambda st: st.v, state, v0),
+                            GeneralizedAlpha(root_finder=ModifiedNewton(tolerance=1e-12)), t_end=0.05, dt=0.001)
+        return jnp.stack([seg.q[-1, o], -seg.lam[-1, system.constraint_offset(haul)]])
 
     @jax.jit
-    def value_and_jacobian(p):
-        # one compiled program for the derivative and the differences: the primal of
-        # the JVPs is s(T) at p
-        values, tangents = jax.vmap(lambda e: jax.jvp(final_s, (p,), (e,)))(jnp.eye(2))
-        return values[0], tangents
+    def derivatives(p, steps):
+        """The output at p, its Jacobian (JVPs) and central differences with ``steps``:
+        one compiled program (the differences are the primal of zero-tangent JVPs)."""
+        d = jnp.diag(steps)
+        points = jnp.concatenate([jnp.tile(p, (6, 1)), p + d, p - d, p + 2 * d, p - 2 * d])
+        directions = jnp.concatenate([jnp.eye(6), jnp.zeros((24, 6))])
+        values, tangents = jax.vmap(lambda x, e: jax.jvp(final, (x,), (e,)))(points, directions)
+        one, two = ((values[6 + 12 * k:12 + 12 * k] - values[12 + 12 * k:18 + 12 * k]) / (2 * (k + 1) * steps[:, None])
+                    for k in (0, 1))
+        return values[0], tangents[:6].T, ((4 * one - two) / 3).T  # Richardson: O(step⁴)
 
-    p0 = jnp.array([MU, -1.0])
-    grad = np.asarray(value_and_jacobian(p0)[1])
-    fd = np.array([(value_and_jacobian(p0 + d)[0] - value_and_jacobian(p0 - d)[0]) / 2e-4
-                   for d in 1e-4 * jnp.eye(2)])
-    np.testing.assert_allclose(grad, fd, rtol=1e-7)
-    # the closed form of the saturated motion, ½ T² (−N, 1/m), up to the transient
-    assert grad[0] == pytest.approx(-0.5 * 0.05**2 * G * np.cos(beta), rel=0.05)
-    assert grad[1] == pytest.approx(0.5 * 0.05**2, rel=0.05)
+    p0 = jnp.array([MU, -1.0, speed, viscous, gain, limit])
+    value, jac, fd = map(np.asarray, derivatives(p0, jnp.array([1e-4, 1e-4, 1e-2, 0.25, 1e-2, 1e-2]) * jnp.abs(p0)))
+    mask = np.array([[1, 1, 0, 0, 0, 0], [0, 0, 1, 1, 1, 1]], bool)
+    np.testing.assert_allclose(jac[0, :2], fd[0, :2], rtol=1e-7)
+    np.testing.assert_allclose(jac[1, 2:], fd[1, 2:], rtol=3e-6)  # F_c's noise: docstring
+    # the trolleys are independent: what each output sees of the others' parameters is
+    # the common Newton iteration's residual (measured up to 3e-8 of the row's scale)
+    scale = np.max(np.abs(np.where(mask, jac, 0.0)), axis=1, keepdims=True)
+    assert np.all(np.abs(np.where(mask, 0.0, jac)) < 1e-6 * scale)
+    # a: the closed form of the saturated motion, ½ T² (−N, 1/m), up to the transient
+    assert jac[0, 0] == pytest.approx(-0.5 * 0.05**2 * G * np.cos(beta), rel=0.05)
+    assert jac[0, 1] == pytest.approx(0.5 * 0.05**2, rel=0.05)
+    # c: the resistance with the friction's viscous part and the servo, and its derivatives
+    x = gain * (target + speed) / limit
+    sech2 = 1.0 / np.cosh(x) ** 2
+    servo = limit * np.tanh(x)
+    assert value[1] == pytest.approx(-(G * (np.sin(beta) + MU * np.cos(beta)) + viscous * speed + servo), rel=1e-9)
+    np.testing.assert_allclose(jac[1, 2:], [-(viscous + gain * sech2), -speed, -sech2 * (target + speed),
+                                            -(np.tanh(x) - x * sech2)], rtol=2e-8)  # measured 7e-9
 
 
 def test_bad_machinery_input_is_refused_before_compiling():

@@ -196,3 +196,103 @@ def test_a_few_steps_follow_the_prescribed_motions(scenario):
     np.testing.assert_allclose(c["s_ring"], 0.5, atol=1e-12)
     assert c["kinetic"][-1] > 0.0
     assert np.all(c["weight_theta"][1:] > 0.0)  # the torque turns it counter-clockwise
+
+
+MACHINERY = '''
+name = "machinery"
+gravity = [0.0, -9.81]
+
+[beams.rail]
+geometry = { type = "straight", start = [0.0, 0.0], direction = [1.0, 0.0], length = 2.0 }
+elements = 2
+section = { E = 2e11, A = 1e-4, I = 1e-9, density = 7800.0 }
+
+[bodies]
+pulled = { mass = 1.0, inertia = 0.1, at = { beam = "rail", s = 0.5 } }
+servoed = { mass = 2.0, inertia = 0.1, at = { beam = "rail", s = 1.5 } }
+
+[joints.clamp]
+type = "clamp"
+beam = "rail"
+node = 0
+
+[joints.slide_a]
+type = "sliding"
+body = "pulled"
+beam = "rail"
+s = 0.5
+friction = { mu = 0.2, viscous = 3.0 }
+drive = { force = 4.0, time_function = "1 + t" }
+
+[joints.slide_b]
+type = "sliding"
+body = "servoed"
+beam = "rail"
+s = 1.5
+drive = { speed = 0.5, gain = 100.0, max_force = 30.0 }
+
+[loads.rope]      # 0.5 m from the anchor, rest length 0.4: taut
+type = "spring_damper"
+a = { ground = [0.5, 0.5] }
+b = { body = "pulled" }
+stiffness = 1000.0
+damping = 5.0
+rest_length = 0.4
+acts = "tension"
+
+[loads.stop]      # open: 0.5 m apart, rest length 0.3
+type = "spring_damper"
+a = { ground = [1.5, -0.5] }
+b = { body = "servoed" }
+stiffness = 1e4
+rest_length = 0.3
+acts = "compression"
+
+[solver]
+name = "generalized-alpha"
+dt = 1e-3
+t_end = 0.01
+
+[outputs.columns]
+rope = { type = "member", load = "rope" }
+rope_taut = { type = "member", load = "rope", component = "engaged" }
+stop = { type = "member", load = "stop" }
+stop_closed = { type = "member", load = "stop", component = "engaged" }
+pull = { type = "drive", joint = "slide_a" }
+servo = { type = "drive", joint = "slide_b" }
+friction = { type = "friction", joint = "slide_a" }
+'''
+
+
+def test_machinery_builds_its_members_drives_and_columns(tmp_path):
+    """Cable machinery from a file (no run): a tension-only and a compression-only
+    spring-damper, sliding joints with friction (a viscous part), a force drive scaled
+    by a time function and a velocity servo; their output columns at the initial state
+    (the body at rest: rope k e, the open stop 0, the pull F f(0), the servo
+    F_max tanh(k u*/F_max), no friction at zero speed)."""
+    from ancf_jax.forces import CompressionOnlySpringDamper, TensionOnlySpringDamper
+    from ancf_jax.results import Results
+    from ancf_jax.sliding import SlidingDriveForce, SlidingFriction, SlidingServo
+
+    sc = load_scenario(str(write(tmp_path, MACHINERY)))
+    system, state = sc.build()
+    forces = {f.name: f for f in system.forces}
+    assert isinstance(forces["rope"], TensionOnlySpringDamper)
+    assert isinstance(forces["stop"], CompressionOnlySpringDamper)
+    pull, servo = forces["slide_a.drive"], forces["slide_b.drive"]
+    assert isinstance(pull, SlidingDriveForce) and float(pull.force) == 4.0
+    assert float(pull.time_function(2.0)) == pytest.approx(3.0)
+    assert isinstance(servo, SlidingServo) and (float(servo.gain), float(servo.max_force)) == (100.0, 30.0)
+    assert float(servo.speed(0.0)) == 0.5
+    (friction,) = system.reaction_forces
+    assert isinstance(friction, SlidingFriction) and friction.name == "slide_a.friction"
+    assert (float(friction.mu), float(friction.viscous), float(friction.regularization)) == (0.2, 3.0, 1e-3)
+    one = lambda a: np.asarray(a)[None]  # noqa: E731
+    results = Results(system, np.zeros(1), one(state.q), one(state.v), np.zeros((1, system.n_coordinates)),
+                      np.zeros((1, system.n_constraints)), np.zeros((1, 3)), np.zeros(1))
+    c = evaluate(results, sc.outputs)
+    assert list(c) == ["t", "rope", "rope_taut", "stop", "stop_closed", "pull", "servo", "friction"]
+    np.testing.assert_allclose([c["rope"][0], c["rope_taut"][0], c["stop"][0], c["stop_closed"][0]],
+                               [1000.0 * 0.1, 1.0, 0.0, 0.0], rtol=1e-12)
+    np.testing.assert_allclose([c["pull"][0], c["servo"][0], c["friction"][0]],
+                               [4.0, 30.0 * np.tanh(100.0 * 0.5 / 30.0), 0.0], rtol=1e-12, atol=1e-12)
