@@ -238,9 +238,21 @@ def test_joint_fit_of_two_experiments(plain):
 
 
 # ---------------------------------------------------------------------------- CLI
-def test_cli_fit_with_nuisance_and_noise(problem, record, tmp_path, capsys):
-    """``ancf-jax fit --nuisance ... --noise ...`` on the record written as CSV: the same
-    problem and sample count as the fixtures, so no new compilation."""
+#: bootstrap members of the CLI test: the 0.1 % and 99.9 % points of χ²(B − 1) bound
+#: the ratio of a B-member standard deviation to the true spread (0.26 to 1.93 for B = 8)
+BOOTSTRAP = 8
+
+
+def test_cli_fit_with_nuisance_noise_and_bootstrap(problem, record, nuisance_fit, tmp_path, capsys):
+    """``ancf-jax fit --nuisance ... --noise ... --bootstrap 8`` on the record written as
+    CSV: the same problem and sample count as the fixtures (the fit itself compiles
+    nothing new; the bootstrap's eight members are one vmapped program). The fit equals
+    the API's (nuisance_fit). The bootstrap refits eight records drawn from the fitted
+    model with the residual RMS as noise, without linearising; reference: the
+    Gauss–Newton standard errors of the fit. Where the model is near-linear in the
+    parameters over ±2 SE (here) the spread of the eight estimates estimates the same
+    σ as SE, so std/SE lies within the χ²(7) band of ``BOOTSTRAP`` (a sample standard
+    deviation of 8 values), and the members' mean lies within 4 SE/sqrt(8) of p̂."""
     from ancf_jax.cli import main
     from ancf_jax.identification import write_csv
     path = tmp_path / "record.csv"
@@ -249,13 +261,27 @@ def test_cli_fit_with_nuisance_and_noise(problem, record, tmp_path, capsys):
     assert main(["fit", "m1", "--elements", str(ELEMENTS), "--t-end", str(T_END), "--dt", str(DT),
                  "--data", str(path), "--params", "alpha", "--init", "alpha=0.01,beta=0",
                  "--nuisance", "time_offset,offset,gain", "--noise", str(SIGMA), "--no-refine",
-                 "--no-figures", "--no-progress", "--out", str(out)]) == 0
+                 "--bootstrap", str(BOOTSTRAP), "--no-figures", "--no-progress", "--out", str(out)]) == 0
     report = assert_unit_keys(out / "fit.json")
     assert report["nuisance"] == list(NUISANCE) and report["discretization"] is None
     assert report["units"]["time_offset"] == "s"
     assert abs(report["time_offset"] - TAU) <= 3 * report["time_offset_stderr"]
     assert report["diagnostics"]["white"]
-    assert "(nuisance)" in capsys.readouterr().out
+    summary = capsys.readouterr().out
+    assert "(nuisance)" in summary and f"bootstrap ({BOOTSTRAP} members)" in summary
+    bs = report["bootstrap"]
+    assert bs["members"] == BOOTSTRAP and bs["converged"] == BOOTSTRAP
+    lo, hi = (np.sqrt(chi2.ppf(q, BOOTSTRAP - 1) / (BOOTSTRAP - 1)) for q in (0.0005, 0.9995))
+    for k, name in enumerate(nuisance_fit.names):
+        if name not in nuisance_fit.free:
+            assert name not in bs["std"]
+            continue
+        assert report[name] == pytest.approx(nuisance_fit.estimates[k], rel=1e-6, abs=1e-12), name
+        se = nuisance_fit.stderr[k]
+        assert bs["gn_stderr"][name] == pytest.approx(se, rel=1e-6), name
+        assert lo <= bs["std_over_stderr"][name] <= hi, (name, bs["std_over_stderr"])
+        assert abs(bs["mean"][name] - nuisance_fit.estimates[k]) <= 4 * se / np.sqrt(BOOTSTRAP), name
+        assert len(bs["estimates"][name]) == BOOTSTRAP
     assert main(["fit", "m1", "--data", str(path), "--nuisance", "delay"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "unknown nuisance parameter 'delay'" in err
