@@ -28,7 +28,7 @@ from ancf_jax.errors import ModelError
 from ancf_jax.identification import (Measurements, Problem, fit, fit_joint, ljung_box, misfit_diagnostics, profile,
                                     synthesize)
 from ancf_jax.identification.report import gauss_newton_statistics
-from ancf_jax.identification.report import DETERMINED, FIXED
+from ancf_jax.identification.report import DETERMINED, FIXED, ZERO
 
 from .json_units import assert_unit_keys
 
@@ -179,42 +179,6 @@ def test_profile_likelihood_agrees_with_gauss_newton(problem, nuisance_fit):
         assert pt["profile_stderr"] == pytest.approx(pr["gn_stderr"], rel=0.02), pt
 
 
-@pytest.mark.slow  # no new compilation (the nuisance program and the bootstrap's batch of BOOTSTRAP)
-def test_profile_interval_near_a_bound_against_gauss_newton_and_bootstrap(problem, curve):
-    """Where Gauss–Newton is unreliable: the record of the fixtures with 1 mm of noise
-    (20 × SIGMA), so that α (true 0.02 1/s) is barely determined next to its bound 0
-    with τ, c and g fitted too. Gauss–Newton's interval α̂ ± 2 SE reaches below 0
-    (negative damping); the profile likelihood (Δ = 4 solved on each side, the other
-    parameters refitted) stays above the bound: Δ at α → 0 is below 4, so its lower end
-    is the bound itself; its upper end is within 10 % of 2 SE of Gauss–Newton's (α
-    enters the record almost linearly above α̂). The bootstrap (8 members of the model
-    at α̂) puts no member below 0 either, and its spread is no larger than the
-    Gauss–Newton SE's χ²(7) band allows. Negative control: the profile of the offset c
-    (linear in the record, far from any bound) equals c ± 2 SE to 1 %."""
-    from ancf_jax.identification import bootstrap, profile_interval
-    t, grid, y = curve
-    sigma = 20 * SIGMA
-    clean = GAIN * np.interp(t + TAU, grid, y) + OFFSET
-    rec = Measurements.from_arrays(t, clean + sigma * np.random.default_rng(2).standard_normal(len(t)),
-                                   source="noisy shifted record")
-    res = fit(problem, rec, {"alpha": 0.01, "beta": 0.0}, free=("alpha",) + NUISANCE, noise=sigma)
-    assert res.converged, res.stop_reason
-    alpha, se = res.estimates[0], res.stderr[0]
-    assert 0 < alpha < 2 * se, (alpha, se)  # Gauss–Newton's 2 SE interval holds negative α
-    iv = profile_interval(problem, res, "alpha")
-    assert iv["gn_lower"] < 0 and iv["lower_at_bound"] and iv["lower"] == 0.0, iv
-    assert min(e["delta"] for e in iv["evaluations"] if e["value"] < alpha) < 4
-    assert abs(iv["upper"] - iv["gn_upper"]) <= 0.1 * 2 * se, iv
-    offset = profile_interval(problem, res, "offset")
-    k = res.names.index("offset")
-    assert not offset["lower_at_bound"]
-    assert offset["lower"] == pytest.approx(res.estimates[k] - 2 * res.stderr[k], abs=0.01 * 2 * res.stderr[k])
-    assert offset["upper"] == pytest.approx(res.estimates[k] + 2 * res.stderr[k], abs=0.01 * 2 * res.stderr[k])
-    bs = bootstrap(problem, res, BOOTSTRAP, noise=sigma)
-    assert min(bs["estimates"]["alpha"]) >= 0
-    assert bs["std_over_stderr"]["alpha"] <= np.sqrt(chi2.ppf(0.9995, BOOTSTRAP - 1) / (BOOTSTRAP - 1))
-
-
 # ---------------------------------------------------------------------------- discretization
 @pytest.fixture(scope="module")
 def plain():
@@ -335,29 +299,43 @@ def test_joint_fit_of_two_experiments(plain):
 
 
 # ---------------------------------------------------------------------------- CLI
-#: bootstrap members of the CLI test: the 0.1 % and 99.9 % points of χ²(B − 1) bound
-#: the ratio of a B-member standard deviation to the true spread (0.26 to 1.93 for B = 8)
+#: bootstrap members: the 0.1 % and 99.9 % points of χ²(B − 1) bound the ratio of a
+#: B-member standard deviation to the true spread (0.26 to 1.93 for B = 8)
 BOOTSTRAP = 8
 
 
-def test_cli_fit_with_nuisance_noise_and_bootstrap(problem, record, nuisance_fit, tmp_path, capsys):
-    """``ancf-jax fit --nuisance ... --noise ... --bootstrap 8`` on the record written as
-    CSV: the same problem and sample count as the fixtures (the fit itself compiles
-    nothing new; the bootstrap's eight members are one vmapped program). The fit equals
-    the API's (nuisance_fit). The bootstrap refits eight records drawn from the fitted
-    model with the residual RMS as noise, without linearising; reference: the
-    Gauss–Newton standard errors of the fit. Where the model is near-linear in the
-    parameters over ±2 SE (here) the spread of the eight estimates estimates the same
-    σ as SE, so std/SE lies within the χ²(7) band of ``BOOTSTRAP`` (a sample standard
-    deviation of 8 values), and the members' mean lies within 4 SE/sqrt(8) of p̂."""
+@pytest.mark.slow  # one new compilation (the bootstrap's vmapped batch of BOOTSTRAP)
+def test_cli_bootstrap_and_profile_interval_near_a_bound(problem, curve, tmp_path, capsys):
+    """Where Gauss–Newton is unreliable. The shifted, offset and scaled record of the
+    fixtures with 1 mm of noise (20 × SIGMA), so that α (true 0.02 1/s) is barely
+    determined next to its bound 0 with τ, c and g fitted too, written as CSV and fitted
+    by ``ancf-jax fit --nuisance ... --noise ... --bootstrap 8`` (the fit is the API's
+    and compiles nothing new; the bootstrap's eight members are one vmapped program).
+
+    Bootstrap: eight records drawn from the fitted model with the stated noise, refitted
+    without linearising; reference: the fit's Gauss–Newton SE. For each free parameter
+    std/SE lies within the χ²(7) band of ``BOOTSTRAP`` (a sample standard deviation of 8
+    values; measured 0.73 to 0.91), and the members' mean within 4 SE/sqrt(8) of p̂.
+
+    Near the bound: Gauss–Newton's α̂ ± 2 SE reaches below 0 (negative damping); the
+    profile likelihood (Δ = 4 solved on each side, τ, c, g refitted) stays above it: Δ at
+    α → 0 is below 4, so its lower end is the bound itself; its upper end agrees with
+    α̂ + 2 SE within 10 % of 2 SE (α enters the record almost linearly above α̂); and no
+    bootstrap member falls below 0. Negative control: the profile interval of the offset
+    c (linear in the record, far from any bound) equals c ± 2 SE to 1 %."""
     from ancf_jax.cli import main
-    from ancf_jax.identification import write_csv
+    from ancf_jax.identification import profile_interval, write_csv
+    t, grid, y = curve
+    sigma = 20 * SIGMA
+    clean = GAIN * np.interp(t + TAU, grid, y) + OFFSET
+    rec = Measurements.from_arrays(t, clean + sigma * np.random.default_rng(2).standard_normal(len(t)),
+                                   source="noisy shifted record")
     path = tmp_path / "record.csv"
-    write_csv(path, record.t, record.y, precision=17)
+    write_csv(path, rec.t, rec.y, precision=17)
     out = tmp_path / "fit"
     assert main(["fit", "m1", "--elements", str(ELEMENTS), "--t-end", str(T_END), "--dt", str(DT),
                  "--data", str(path), "--params", "alpha", "--init", "alpha=0.01,beta=0",
-                 "--nuisance", "time_offset,offset,gain", "--noise", str(SIGMA), "--no-refine",
+                 "--nuisance", "time_offset,offset,gain", "--noise", str(sigma), "--no-refine",
                  "--bootstrap", str(BOOTSTRAP), "--no-figures", "--no-progress", "--out", str(out)]) == 0
     report = assert_unit_keys(out / "fit.json")
     assert report["nuisance"] == list(NUISANCE) and report["discretization"] is None
@@ -366,19 +344,36 @@ def test_cli_fit_with_nuisance_noise_and_bootstrap(problem, record, nuisance_fit
     assert report["diagnostics"]["white"]
     summary = capsys.readouterr().out
     assert "(nuisance)" in summary and f"bootstrap ({BOOTSTRAP} members)" in summary
+
+    res = fit(problem, rec, {"alpha": 0.01, "beta": 0.0}, free=("alpha",) + NUISANCE, noise=sigma)
     bs = report["bootstrap"]
     assert bs["members"] == BOOTSTRAP and bs["converged"] == BOOTSTRAP
     lo, hi = (np.sqrt(chi2.ppf(q, BOOTSTRAP - 1) / (BOOTSTRAP - 1)) for q in (0.0005, 0.9995))
-    for k, name in enumerate(nuisance_fit.names):
-        if name not in nuisance_fit.free:
+    for k, name in enumerate(res.names):
+        if name not in res.free:
             assert name not in bs["std"]
             continue
-        assert report[name] == pytest.approx(nuisance_fit.estimates[k], rel=1e-6, abs=1e-12), name
-        se = nuisance_fit.stderr[k]
+        assert report["raw_estimates"][name] == pytest.approx(res.estimates[k], rel=1e-6, abs=1e-12), name
+        se = res.stderr[k]
         assert bs["gn_stderr"][name] == pytest.approx(se, rel=1e-6), name
         assert lo <= bs["std_over_stderr"][name] <= hi, (name, bs["std_over_stderr"])
-        assert abs(bs["mean"][name] - nuisance_fit.estimates[k]) <= 4 * se / np.sqrt(BOOTSTRAP), name
+        assert abs(bs["mean"][name] - res.estimates[k]) <= 4 * se / np.sqrt(BOOTSTRAP), name
         assert len(bs["estimates"][name]) == BOOTSTRAP
+
+    alpha, se = res.estimates[0], res.stderr[0]
+    assert 0 < alpha < 2 * se, (alpha, se)  # Gauss–Newton's 2 SE interval holds negative α
+    assert report["alpha"] is None and report["alpha_status"] == ZERO  # the report says so
+    iv = profile_interval(problem, res, "alpha")
+    assert iv["gn_lower"] < 0 and iv["lower_at_bound"] and iv["lower"] == 0.0, iv
+    assert min(e["delta"] for e in iv["evaluations"] if e["value"] < alpha) < 4
+    assert abs(iv["upper"] - iv["gn_upper"]) <= 0.1 * 2 * se, iv
+    assert min(bs["estimates"]["alpha"]) >= 0
+    offset = profile_interval(problem, res, "offset")
+    k = res.names.index("offset")
+    assert not offset["lower_at_bound"]
+    assert offset["lower"] == pytest.approx(res.estimates[k] - 2 * res.stderr[k], abs=0.01 * 2 * res.stderr[k])
+    assert offset["upper"] == pytest.approx(res.estimates[k] + 2 * res.stderr[k], abs=0.01 * 2 * res.stderr[k])
+
     assert main(["fit", "m1", "--data", str(path), "--nuisance", "delay"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "unknown nuisance parameter 'delay'" in err
