@@ -179,6 +179,38 @@ def test_profile_likelihood_agrees_with_gauss_newton(problem, nuisance_fit):
         assert pt["profile_stderr"] == pytest.approx(pr["gn_stderr"], rel=0.02), pt
 
 
+@pytest.mark.parametrize("se,lower_z,bound", [(0.3, -2 ** 1.25, False), (0.6, None, True)])
+def test_profile_interval_solves_an_asymmetric_profile(monkeypatch, se, lower_z, bound):
+    """The interval solver alone, on a closed-form profile (no simulation: ``profile``
+    replaced): sqrt(Δ) = z^1.5 above and |z|^0.8 below the estimate, z = (p − p̂)/SE,
+    so Δ = 4 at z = 2^(2/3) (reached from the first trial at z = 2 by regula falsi) and
+    z = −2^(5/4) (after stepping out from −2), each to the solver's tolerance. With SE twice as
+    large the lower root lies below 0 and the positive parameter's end is its bound."""
+    from types import SimpleNamespace
+    from ancf_jax.identification import profile_interval
+    from ancf_jax.identification import uncertainty
+
+    def fake_profile(problem, result, name, steps, max_iterations=None):
+        (z,) = steps
+        root = abs(z) ** 1.5 if z > 0 else abs(z) ** 0.8
+        return dict(points=[dict(value=1.0 + z * se, delta=root ** 2)])
+
+    monkeypatch.setattr(uncertainty, "profile", fake_profile)
+    result = SimpleNamespace(free=("k",), names=("k",), estimates=np.array([1.0]), stderr=np.array([se]))
+    iv = profile_interval(SimpleNamespace(log_scaled=np.array([True])), result, "k")
+    # the solver's contract: |sqrt(Δ) − 2| <= tol = 0.01 at each end, i.e. z within
+    # 0.01 / (d sqrt(Δ)/dz): 0.005 above, 0.015 below
+    z = (iv["upper"] - 1.0) / se
+    assert abs(z ** 1.5 - 2) <= 0.01 and z == pytest.approx(2 ** (2 / 3), abs=0.006)
+    assert iv["lower_at_bound"] == bound
+    if bound:
+        assert iv["lower"] == 0.0
+    else:
+        z = (iv["lower"] - 1.0) / se
+        assert abs(abs(z) ** 0.8 - 2) <= 0.01 and z == pytest.approx(lower_z, abs=0.016)
+    assert iv["gn_upper"] == pytest.approx(1.0 + 2 * se) and len(iv["evaluations"]) <= 12
+
+
 # ---------------------------------------------------------------------------- discretization
 @pytest.fixture(scope="module")
 def plain():

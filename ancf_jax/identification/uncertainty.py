@@ -136,7 +136,8 @@ def profile_interval(problem: Problem, result, name: str, *, level: float = PROF
     p̂ ± 2 SE). Each side starts at sqrt(level) Gauss–Newton standard errors, steps out
     by factors of 2 until Δ ≥ level, and then solves sqrt(Δ) = sqrt(level) by regula
     falsi (Illinois) on sqrt(Δ), which is linear in p_k where the linearisation holds
-    (one step then), to |sqrt(Δ) − sqrt(level)| <= ``tol``. For a positive parameter
+    (one step then), to |sqrt(Δ) − sqrt(level)| <= ``tol`` within ``max_evaluations``
+    per side (else ModelError). For a positive parameter
     (fitted on log p) whose profile stays below the level down to 1e-8 p̂, the lower end
     is its bound 0 (``lower_at_bound``). Every side costs a few refits of the other
     free parameters (the fit's compiled program).
@@ -166,6 +167,7 @@ def profile_interval(problem: Problem, result, name: str, *, level: float = PROF
         """(end, at_bound) on one side."""
         a, ga = p_hat, -float(np.sqrt(level))
         b = p_hat + sign * np.sqrt(level) * se
+        first = len(evaluations)
         while True:
             if sign < 0 and positive and b <= 1e-8 * p_hat:
                 b = 1e-8 * p_hat
@@ -176,14 +178,15 @@ def profile_interval(problem: Problem, result, name: str, *, level: float = PROF
             gb = root(b)
             if gb >= 0:
                 break
-            if len(evaluations) >= max_evaluations:
+            if len(evaluations) - first >= max_evaluations:
                 raise ModelError(f"profile_interval: Δ of {name} stays below {level:g} out to {b:g} "
                                  f"({max_evaluations} evaluations)")
             a, ga, b = b, gb, p_hat + 2 * (b - p_hat)
         last = 0
-        while abs(gb) > tol and abs(ga) > tol:
-            if len(evaluations) >= max_evaluations:
-                break
+        while abs(gb) > tol:  # gb is always a true value (Illinois halves only ga)
+            if len(evaluations) - first >= max_evaluations:
+                raise ModelError(f"profile_interval: Δ of {name} = {level:g} not solved to {tol:g} in "
+                                 f"{max_evaluations} evaluations (near {b:g})")
             c = b - gb * (b - a) / (gb - ga)
             gc = root(c)
             if gc * gb < 0:
@@ -194,7 +197,7 @@ def profile_interval(problem: Problem, result, name: str, *, level: float = PROF
                     ga /= 2
                 last = 1
             b, gb = c, gc
-        return (b if abs(gb) <= abs(ga) else a), False
+        return b, False
 
     lower, at_bound = side(-1)
     upper, _ = side(+1)
