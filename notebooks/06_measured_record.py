@@ -129,6 +129,9 @@ problem = Problem.from_scenario("m1", ("alpha", "beta"), elements=ELEMENTS, t_en
                                 nuisance=("time_offset", "offset", "gain"))
 naive = fit(problem, record, {"alpha": 0.01, "beta": 0.0}, free=("alpha",), noise=SIGMA)
 print(naive.summary())
+# what the text below says (checked when the notebook runs in the tests)
+assert not naive.diagnostics["white"] and naive.diagnostics["rms_over_noise"] > 2
+assert any(n.startswith("the model does not explain the data") for n in naive.to_dict()["notes"])
 
 # %% [markdown]
 # The summary flags the residuals as structured and far above the stated noise: the
@@ -170,6 +173,10 @@ print("refined:", dz["refined"] or "nothing", "| final:", dz["final_dt_s"] * 1e3
       "elements | within limit:", dz["within_limit"])
 for note in dz["notes"]:
     print("note:", note)
+# the check catches the starting model's bias on the mesh axis (a shift above the limit)
+assert dz["rounds"][0]["checks"]["mesh"]["max_shift_se"] > dz["limit_se"]
+if QUICK:  # no budget: the check says so instead of refining
+    assert dz["refined"] == [] and not dz["within_limit"] and dz["notes"]
 
 # %% [markdown]
 # ## 5. Residuals

@@ -1,14 +1,19 @@
 """Identification on records that the fitted model did not make (issue 18): nuisance
-parameters of the measurement, misfit diagnostics, discretization control, bootstrap.
+parameters of the measurement, misfit diagnostics, discretization control, bootstrap
+and profile likelihood, scenario keys as parameters, several sensors.
 
 The model is the one of ``tests/test_identification.py`` — M1 with 3 elements,
 generalized-α at h = 2 ms, samples at 500 Hz — so the cost stays a few compilations:
 one Jacobian program with the nuisance parameters (τ, c, g) that serves the nuisance,
-derivative and misfit tests, and the programs of the discretization test. The
-reference for every check is independent of the code under test: records shifted,
-offset and scaled by NumPy from a model curve, Ljung–Box's Q from its textbook formula
-with ``scipy.stats.chi2``, finite differences, a finer discretization, and the
-bootstrap's spread against the Gauss–Newton standard errors.
+derivative, misfit and profile tests, its vmapped batch of eight for the bootstrap,
+the programs of the discretization tests (finer steps; 6 and 12 elements), and one
+program each for the scenario keys, M1's strain gauge and tip x with a strain-rate
+damped bending law, and a trolley on an inclined rail with friction. The reference for
+every check is independent of the code under test: records shifted, offset and scaled
+by NumPy from a model curve, Ljung–Box's Q from its textbook formula with
+``scipy.stats.chi2``, finite differences of rebuilt scenarios, a finer discretization,
+a closed form, and the bootstrap's spread and the profile likelihood against the
+Gauss–Newton standard errors.
 """
 
 import json
@@ -23,7 +28,7 @@ from ancf_jax.errors import ModelError
 from ancf_jax.identification import (Measurements, Problem, fit, fit_joint, ljung_box, misfit_diagnostics, profile,
                                     synthesize)
 from ancf_jax.identification.report import gauss_newton_statistics
-from ancf_jax.identification.report import DETERMINED, FIXED
+from ancf_jax.identification.report import DETERMINED, FIXED, ZERO
 
 from .json_units import assert_unit_keys
 
@@ -174,11 +179,52 @@ def test_profile_likelihood_agrees_with_gauss_newton(problem, nuisance_fit):
         assert pt["profile_stderr"] == pytest.approx(pr["gn_stderr"], rel=0.02), pt
 
 
+@pytest.mark.parametrize("se,lower_z,bound", [(0.3, -2 ** 1.25, False), (0.6, None, True)])
+def test_profile_interval_solves_an_asymmetric_profile(monkeypatch, se, lower_z, bound):
+    """The interval solver alone, on a closed-form profile (no simulation: ``profile``
+    replaced): sqrt(Δ) = z^1.5 above and |z|^0.8 below the estimate, z = (p − p̂)/SE,
+    so Δ = 4 at z = 2^(2/3) (reached from the first trial at z = 2 by regula falsi) and
+    z = −2^(5/4) (after stepping out from −2), each to the solver's tolerance. With SE twice as
+    large the lower root lies below 0 and the positive parameter's end is its bound."""
+    from types import SimpleNamespace
+    from ancf_jax.identification import profile_interval
+    from ancf_jax.identification import uncertainty
+
+    def fake_profile(problem, result, name, steps, max_iterations=None):
+        (z,) = steps
+        root = abs(z) ** 1.5 if z > 0 else abs(z) ** 0.8
+        return dict(points=[dict(value=1.0 + z * se, delta=root ** 2)])
+
+    monkeypatch.setattr(uncertainty, "profile", fake_profile)
+    result = SimpleNamespace(free=("k",), names=("k",), estimates=np.array([1.0]), stderr=np.array([se]))
+    iv = profile_interval(SimpleNamespace(log_scaled=np.array([True])), result, "k")
+    # the solver's contract: |sqrt(Δ) − 2| <= tol = 0.01 at each end, i.e. z within
+    # 0.01 / (d sqrt(Δ)/dz): 0.005 above, 0.015 below
+    z = (iv["upper"] - 1.0) / se
+    assert abs(z ** 1.5 - 2) <= 0.01 and z == pytest.approx(2 ** (2 / 3), abs=0.006)
+    assert iv["lower_at_bound"] == bound
+    if bound:
+        assert iv["lower"] == 0.0
+    else:
+        z = (iv["lower"] - 1.0) / se
+        assert abs(abs(z) ** 0.8 - 2) <= 0.01 and z == pytest.approx(lower_z, abs=0.016)
+    assert iv["gn_upper"] == pytest.approx(1.0 + 2 * se) and len(iv["evaluations"]) <= 12
+
+
 # ---------------------------------------------------------------------------- discretization
 @pytest.fixture(scope="module")
 def plain():
     """The model of tests/test_identification.py (α, β; no nuisance parameters)."""
     return Problem.from_scenario("m1", ("alpha", "beta"), elements=ELEMENTS, t_end=T_END, dt=DT)
+
+
+def _foreign_record(finer: Problem, sigma: float, seed: int, source: str) -> Measurements:
+    """M1's tip y at α = 0.02 by a finer problem (values program), sampled at RATE, with
+    noise σ of the given seed."""
+    _, clean = synthesize(finer, {"alpha": 0.02, "beta": 0.0}, noise=0.0, rate=RATE)
+    t = np.arange(len(clean)) / RATE
+    return Measurements.from_arrays(t, clean + sigma * np.random.default_rng(seed).standard_normal(len(t)),
+                                    source=source)
 
 
 @pytest.mark.slow  # three new compilations (runs at h = 0.5 ms and 1 ms, the fit at 1 ms)
@@ -190,13 +236,10 @@ def test_discretization_check_catches_step_bias(plain):
     order, so the 2 ms estimate's bias is b(h) = C h² against the data's 0.5 ms
     (C h²/16), and the predicted shift to 1 ms is b(h/2) − b(h) = −¾ C h²: the shift is
     −0.8 × (estimate − truth), up to the noise (its standard error). The refinement loop
-    itself (refit at 1 ms, recheck within the limit, coverage over 20 seeds) is measured
-    in benchmarks/identification_coverage.py, as it needs two more compiled programs."""
-    _, clean = synthesize(plain.refined(step=4), {"alpha": 0.02, "beta": 0.0}, noise=0.0, rate=RATE)
-    t = np.arange(len(clean)) / RATE
+    is tested on the mesh axis below; coverage over 20 seeds after refinement is
+    measured in benchmarks/identification_coverage.py."""
     sigma = 2e-5
-    rec = Measurements.from_arrays(t, clean + sigma * np.random.default_rng(5).standard_normal(len(t)),
-                                   source="finer step")
+    rec = _foreign_record(plain.refined(step=4), sigma, 5, "finer step")
     res = fit(plain, rec, {"alpha": 0.01, "beta": 0.0}, free=("alpha",), noise=sigma, discretization=True,
               refine_axes=("step",), refine_budget=0)
     dz = res.discretization
@@ -211,6 +254,56 @@ def test_discretization_check_catches_step_bias(plain):
     d = res.to_dict()
     assert d["discretization"]["final_dt_s"] == 2e-3
     json.dumps(d)
+
+
+@pytest.mark.slow  # three new compilations (6 elements without and with derivatives, 12 without)
+def test_discretization_refines_the_mesh_within_its_budget(plain, tmp_path, capsys):
+    """Foreign data on the mesh axis: M1 at 6 elements (0.1 mm noise), fitted from 3
+    elements with the check on the mesh axis and a budget of one refinement. At 3
+    elements α̂ is 0.83 1/s (40 × the truth: the coarse mesh's stiffness error), the
+    check predicts that doubling the mesh moves α by ~12 SE, so the mesh is doubled
+    once and α refitted at 6 elements, the data's own mesh: the refit lands within 3 SE
+    of the truth. Independent reference for Eq. D: the predicted shift (one Gauss–Newton
+    step from the 3-element fit) against the actual change of the refit (a nonlinear
+    refit at 6 elements); measured 0.4 % apart. At 6 elements doubling again moves α by
+    ~27 SE (the 12-element model moves away from the 6-element data), so the budget is
+    spent: within_limit is false, the remaining shift is that round's, and a note says
+    so. Then ``ancf-jax fit`` on the same record without ``--no-refine`` (the default
+    check on both axes, ``--refine-budget 0``; the programs of the other tests): its
+    mesh shift equals the API's first round and the summary prints the check."""
+    sigma = 1e-4
+    rec = _foreign_record(plain.refined(mesh=2), sigma, 3, "6 elements")
+    res = fit(plain, rec, {"alpha": 0.02, "beta": 0.0}, free=("alpha",), noise=sigma, discretization=True,
+              refine_axes=("mesh",), refine_budget=1)
+    dz = res.discretization
+    first, last = (r["checks"]["mesh"] for r in dz["rounds"])
+    assert [r["elements"] for r in dz["rounds"]] == [3, 6] and dz["axes"] == ["mesh"]
+    assert dz["refined"] == [dict(step_divided_by=1, elements_multiplied_by=2, dt_s=DT, elements=6)]
+    assert dz["final_elements"] == 6 and dz["final_dt_s"] == DT and res.elements == 6
+    assert first["max_shift_se"] > 0.3 and first["elements"] == 6
+    alpha3 = dz["rounds"][0]["estimates"]["alpha"]
+    assert abs(res.estimates[0] - 0.02) <= 3 * res.stderr[0] < abs(alpha3 - 0.02), (alpha3, res.estimates)
+    actual = res.estimates[0] - alpha3
+    assert first["shift"]["alpha"] == pytest.approx(actual, rel=0.02), (first, actual)
+    assert last["elements"] == 12 and dz["remaining_shift_se"] == last["max_shift_se"] > 0.3
+    assert not dz["within_limit"] and any("refinement budget (1) is spent" in n for n in dz["notes"])
+    assert "refined mesh ×2; final h = 0.002 s, 6 elements" in dz["summary"] and "ABOVE" in dz["summary"]
+    json.dumps(res.to_dict())
+
+    from ancf_jax.cli import main
+    from ancf_jax.identification import write_csv
+    path = tmp_path / "six.csv"
+    write_csv(path, rec.t, rec.y, precision=17)
+    out = tmp_path / "fit"
+    main(["fit", "m1", "--elements", str(ELEMENTS), "--t-end", str(T_END), "--dt", str(DT), "--data", str(path),
+          "--params", "alpha", "--init", "alpha=0.02,beta=0", "--noise", str(sigma), "--refine-budget", "0",
+          "--no-figures", "--no-progress", "--out", str(out)])
+    report = assert_unit_keys(out / "fit.json")
+    cli = report["discretization"]
+    assert cli["axes"] == ["step", "mesh"] and cli["refined"] == [] and cli["final_elements"] == 3
+    assert cli["rounds"][0]["checks"]["mesh"]["shift"]["alpha"] == pytest.approx(first["shift"]["alpha"], rel=1e-6)
+    assert not cli["within_limit"] and cli["remaining_shift_se"] >= first["max_shift_se"]
+    assert f"  discretization: {cli['summary']}" in capsys.readouterr().out
 
 
 # ---------------------------------------------------------------------------- joint
@@ -238,24 +331,81 @@ def test_joint_fit_of_two_experiments(plain):
 
 
 # ---------------------------------------------------------------------------- CLI
-def test_cli_fit_with_nuisance_and_noise(problem, record, tmp_path, capsys):
-    """``ancf-jax fit --nuisance ... --noise ...`` on the record written as CSV: the same
-    problem and sample count as the fixtures, so no new compilation."""
+#: bootstrap members: the 0.1 % and 99.9 % points of χ²(B − 1) bound the ratio of a
+#: B-member standard deviation to the true spread (0.26 to 1.93 for B = 8)
+BOOTSTRAP = 8
+
+
+@pytest.mark.slow  # one new compilation (the bootstrap's vmapped batch of BOOTSTRAP)
+def test_cli_bootstrap_and_profile_interval_near_a_bound(problem, curve, tmp_path, capsys):
+    """Where Gauss–Newton is unreliable. The shifted, offset and scaled record of the
+    fixtures with 1 mm of noise (20 × SIGMA), so that α (true 0.02 1/s) is barely
+    determined next to its bound 0 with τ, c and g fitted too, written as CSV and fitted
+    by ``ancf-jax fit --nuisance ... --noise ... --bootstrap 8`` (the fit is the API's
+    and compiles nothing new; the bootstrap's eight members are one vmapped program).
+
+    Bootstrap: eight records drawn from the fitted model with the stated noise, refitted
+    without linearising; reference: the fit's Gauss–Newton SE. For each free parameter
+    std/SE lies within the χ²(7) band of ``BOOTSTRAP`` (a sample standard deviation of 8
+    values; measured 0.73 to 0.91), and the members' mean within 4 SE/sqrt(8) of p̂.
+
+    Near the bound: Gauss–Newton's α̂ ± 2 SE reaches below 0 (negative damping); the
+    profile likelihood (Δ = 4 solved on each side, τ, c, g refitted) stays above it: Δ at
+    α → 0 is below 4, so its lower end is the bound itself; its upper end agrees with
+    α̂ + 2 SE within 10 % of 2 SE (α enters the record almost linearly above α̂); and no
+    bootstrap member falls below 0. Negative control: the profile interval of the offset
+    c (linear in the record, far from any bound) equals c ± 2 SE to 1 %."""
     from ancf_jax.cli import main
-    from ancf_jax.identification import write_csv
+    from ancf_jax.identification import profile_interval, write_csv
+    t, grid, y = curve
+    sigma = 20 * SIGMA
+    clean = GAIN * np.interp(t + TAU, grid, y) + OFFSET
+    rec = Measurements.from_arrays(t, clean + sigma * np.random.default_rng(2).standard_normal(len(t)),
+                                   source="noisy shifted record")
     path = tmp_path / "record.csv"
-    write_csv(path, record.t, record.y, precision=17)
+    write_csv(path, rec.t, rec.y, precision=17)
     out = tmp_path / "fit"
     assert main(["fit", "m1", "--elements", str(ELEMENTS), "--t-end", str(T_END), "--dt", str(DT),
                  "--data", str(path), "--params", "alpha", "--init", "alpha=0.01,beta=0",
-                 "--nuisance", "time_offset,offset,gain", "--noise", str(SIGMA), "--no-refine",
-                 "--no-figures", "--no-progress", "--out", str(out)]) == 0
+                 "--nuisance", "time_offset,offset,gain", "--noise", str(sigma), "--no-refine",
+                 "--bootstrap", str(BOOTSTRAP), "--no-figures", "--no-progress", "--out", str(out)]) == 0
     report = assert_unit_keys(out / "fit.json")
     assert report["nuisance"] == list(NUISANCE) and report["discretization"] is None
     assert report["units"]["time_offset"] == "s"
     assert abs(report["time_offset"] - TAU) <= 3 * report["time_offset_stderr"]
     assert report["diagnostics"]["white"]
-    assert "(nuisance)" in capsys.readouterr().out
+    summary = capsys.readouterr().out
+    assert "(nuisance)" in summary and f"bootstrap ({BOOTSTRAP} members)" in summary
+
+    res = fit(problem, rec, {"alpha": 0.01, "beta": 0.0}, free=("alpha",) + NUISANCE, noise=sigma)
+    bs = report["bootstrap"]
+    assert bs["members"] == BOOTSTRAP and bs["converged"] == BOOTSTRAP
+    lo, hi = (np.sqrt(chi2.ppf(q, BOOTSTRAP - 1) / (BOOTSTRAP - 1)) for q in (0.0005, 0.9995))
+    for k, name in enumerate(res.names):
+        if name not in res.free:
+            assert name not in bs["std"]
+            continue
+        assert report["raw_estimates"][name] == pytest.approx(res.estimates[k], rel=1e-6, abs=1e-12), name
+        se = res.stderr[k]
+        assert bs["gn_stderr"][name] == pytest.approx(se, rel=1e-6), name
+        assert lo <= bs["std_over_stderr"][name] <= hi, (name, bs["std_over_stderr"])
+        assert abs(bs["mean"][name] - res.estimates[k]) <= 4 * se / np.sqrt(BOOTSTRAP), name
+        assert len(bs["estimates"][name]) == BOOTSTRAP
+
+    alpha, se = res.estimates[0], res.stderr[0]
+    assert 0 < alpha < 2 * se, (alpha, se)  # Gauss–Newton's 2 SE interval holds negative α
+    assert report["alpha"] is None and report["alpha_status"] == ZERO  # the report says so
+    iv = profile_interval(problem, res, "alpha")
+    assert iv["gn_lower"] < 0 and iv["lower_at_bound"] and iv["lower"] == 0.0, iv
+    assert min(e["delta"] for e in iv["evaluations"] if e["value"] < alpha) < 4
+    assert abs(iv["upper"] - iv["gn_upper"]) <= 0.1 * 2 * se, iv
+    assert min(bs["estimates"]["alpha"]) >= 0
+    offset = profile_interval(problem, res, "offset")
+    k = res.names.index("offset")
+    assert not offset["lower_at_bound"]
+    assert offset["lower"] == pytest.approx(res.estimates[k] - 2 * res.stderr[k], abs=0.01 * 2 * res.stderr[k])
+    assert offset["upper"] == pytest.approx(res.estimates[k] + 2 * res.stderr[k], abs=0.01 * 2 * res.stderr[k])
+
     assert main(["fit", "m1", "--data", str(path), "--nuisance", "delay"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "unknown nuisance parameter 'delay'" in err
@@ -394,3 +544,183 @@ def test_scenario_key_through_the_static_equilibrium_is_refused():
     sc_system, sc_state = __import__("ancf_jax.scenario", fromlist=["x"]).load_scenario("m1").build()
     with pytest.raises(ModelError, match="without its scenario"):
         Problem(sc_system, sc_state, ("beams.beam.section.I",), dt=DT, t_end=T_END)
+
+
+# ---------------------------------------------------------------------------- material laws, friction, sensors
+#: M1 with strain-rate (Kelvin–Voigt) damping of bending, M = EI κ + d κ̇ (Exudyn's
+#: bendingDamping), fitted by the law's key; EA through the section's area (M1's mass is
+#: given separately, so A changes the axial stiffness only)
+LAW_KEYS = ("beams.beam.section.A", "beams.beam.bending_law.damping", "alpha")
+LAW = {"beams.beam.section.A": 7.854e-7, "beams.beam.bending_law.damping": 2e-5, "alpha": ALPHA}
+#: the strain gauge's record (M1's sigma_e1_mid: bending stress at s = 33.5 mm, outer
+#: fibre) at 250 Hz over 0.6 s
+GAUGE_T = np.arange(151) / 250.0
+
+
+def _law_overrides(values: dict) -> list:
+    d = float(values["beams.beam.bending_law.damping"])
+    return [f"beams.beam.section.A={float(values['beams.beam.section.A'])!r}",
+            f'beams.beam.bending_law={{type = "strain_rate_damped", damping = {d!r}}}']
+
+
+def _rebuilt_output(output: str, values: dict, t) -> np.ndarray:
+    """Reference: the output of M1 rebuilt from the scenario with the law's keys set by
+    ``--set`` overrides (not by the probed map under test), run by an (α, β) problem's
+    program without derivatives: the keys are data of that program, so every rebuild
+    shares it (a problem with the keys as parameters compiles their probed
+    coefficients into its program)."""
+    pr = Problem.from_scenario("m1", ("alpha", "beta"), output=output, elements=ELEMENTS, t_end=T_END, dt=DT,
+                               overrides=_law_overrides(values))
+    probe = Measurements.from_arrays(t, np.zeros_like(t))
+    grid, y, ok = pr.curves(pr.vector({"alpha": float(values["alpha"]), "beta": 0.0}), [probe], program="values")
+    assert ok[0]
+    return np.interp(t, grid, y[0])
+
+
+@pytest.fixture(scope="module")
+def gauge():
+    return Problem.from_scenario("m1", LAW_KEYS, output="sigma_e1_mid", elements=ELEMENTS, t_end=T_END, dt=DT,
+                                 overrides=_law_overrides(LAW))
+
+
+@pytest.mark.slow  # two new compilations (the stress output with the law's keys; the reference without)
+def test_strain_rate_damping_and_EA_on_a_strain_gauge(gauge):
+    """A strain gauge (M1's bending stress sigma_e1_mid, Pa, 250 Hz over 0.6 s) with
+    the strain-rate damping of bending d and EA (through A) as scenario keys. First
+    ∂σ/∂A and ∂σ/∂d by forward mode through the probed key maps against central
+    differences of M1 *rebuilt* at A ± δ and d ± δ (δ = 1e-3 of the value). Measured
+    (rebuilds run through the keyed program): 7e-7 of the largest derivative for A with
+    δ and δ/2 alike (the Newton tolerance's noise, not truncation: Richardson does not
+    lower it); tested to 3e-6. Then d and α
+    recovered to 1e-6 relative (A held) from a noise-free stress record of M1 rebuilt
+    with d 1.5 × and α 2 × the start."""
+    assert [p.kind for p in gauge.params] == ["key", "key", "alpha"]
+    assert gauge.units[:2] == ("m²", "N·s or N·m²·s") and gauge.output.unit == "Pa"
+    probe = Measurements.from_arrays(GAUGE_T, np.zeros_like(GAUGE_T))
+    r, jac, *_ = gauge.evaluate(gauge.vector(LAW), [probe])
+    sigma = r[0] * np.sqrt(len(GAUGE_T))  # r = (σ_sim − 0) / sqrt(N)
+    assert np.ptp(sigma) > 1e6  # Pa: a stress, not a position
+    np.testing.assert_allclose(sigma, _rebuilt_output("sigma_e1_mid", LAW, GAUGE_T), rtol=0,
+                               atol=1e-9 * np.max(np.abs(sigma)))
+    for k, key in enumerate(LAW_KEYS[:2]):
+        h = 1e-3 * LAW[key]
+        hi, lo = dict(LAW), dict(LAW)
+        hi[key] += h
+        lo[key] -= h
+        fd = (_rebuilt_output("sigma_e1_mid", hi, GAUGE_T) - _rebuilt_output("sigma_e1_mid", lo, GAUGE_T)) / (2 * h)
+        exact = jac[0][:, k] * np.sqrt(len(GAUGE_T))
+        scale = np.max(np.abs(exact))
+        assert scale > 0
+        assert np.max(np.abs(fd - exact)) <= 3e-6 * scale, (key, np.max(np.abs(fd - exact)) / scale)
+    truth = dict(LAW, **{"beams.beam.bending_law.damping": 3e-5, "alpha": 0.04})
+    record = Measurements.from_arrays(GAUGE_T, _rebuilt_output("sigma_e1_mid", truth, GAUGE_T), source="gauge")
+    res = fit(gauge, record, LAW, free=LAW_KEYS[1:])
+    assert res.converged, res.stop_reason
+    for name in LAW_KEYS[1:]:
+        assert res.estimates[res.names.index(name)] == pytest.approx(truth[name], rel=1e-6), name
+
+
+@pytest.mark.slow  # two new compilations (tip x with the law's keys; its reference without)
+def test_two_sensors_at_different_rates_and_spans_fitted_jointly(gauge):
+    """The strain gauge (250 Hz over 0.6 s, weight 1/(0.1 MPa)²) and the tip's x (500 Hz
+    over 1 s, weight 1/(0.1 mm)²) of one experiment, noise-free records of M1 rebuilt
+    with d 1.5 × and α 2 × the start, fitted jointly for d and α (A held): both
+    recovered to 1e-6 relative; each record keeps its own times, span and unit."""
+    truth = dict(LAW, **{"beams.beam.bending_law.damping": 3e-5, "alpha": 0.04})
+    tip = Problem.from_scenario("m1", LAW_KEYS, output="tip_x", elements=ELEMENTS, t_end=T_END, dt=DT,
+                                overrides=_law_overrides(LAW))
+    tip_t = np.arange(501) / RATE
+    records = [Measurements.from_arrays(GAUGE_T, _rebuilt_output("sigma_e1_mid", truth, GAUGE_T),
+                                        np.full(len(GAUGE_T), 1e-10), source="strain gauge"),
+               Measurements.from_arrays(tip_t, _rebuilt_output("tip_x", truth, tip_t),
+                                        np.full(len(tip_t), 1e8), source="tip x")]
+    assert tip.output.unit == "m" and gauge.output.unit == "Pa"
+    res = fit_joint([gauge, tip], records, LAW, free=LAW_KEYS[1:])
+    assert res.converged, res.stop_reason
+    assert res.n_samples == len(GAUGE_T) + len(tip_t)
+    for name in LAW_KEYS[1:]:
+        assert res.estimates[res.names.index(name)] == pytest.approx(truth[name], rel=1e-6), name
+    assert res.estimates[0] == LAW["beams.beam.section.A"]
+
+
+_INCLINE = """
+name = "incline"
+description = "a trolley sliding down a stiff clamped rail inclined at 30 degrees, Coulomb friction"
+gravity = [0.0, -9.81]
+
+[beams.rail]
+geometry = { type = "straight", start = [0.0, 0.0], direction = [0.8660254037844386, -0.5], length = 1.0 }
+elements = 1
+
+[beams.rail.section]
+E = 2e11
+A = 1e-4
+I = 1e-8
+density = 7800.0
+
+[bodies.trolley]
+mass = 1.0
+inertia = 0.01
+at = { beam = "rail", s = 0.1 }
+
+[joints.clamp]
+type = "clamp"
+beam = "rail"
+node = 0
+
+[joints.slide]
+type = "sliding"
+body = "trolley"
+beam = "rail"
+s = 0.1
+friction = { mu = 0.2 }
+
+[solver]
+name = "generalized-alpha"
+dt = 2e-3
+t_end = 0.5
+
+[outputs]
+dt = 2e-3
+
+[outputs.columns]
+s = { type = "sliding", joint = "slide" }
+"""
+MU = "joints.slide.friction.mu"
+
+
+@pytest.mark.slow  # two new compilations (the incline with μ as parameter; the reference without)
+def test_friction_coefficient_from_a_sliding_coordinate(tmp_path):
+    """μ of a sliding joint's regularized Coulomb friction (tanh) as a scenario key,
+    the sliding coordinate s as the sensor. The model first against the rigid-incline
+    closed form s0 + g (sin θ − μ cos θ) t²/2: within the rail's own deflection under
+    the trolley (P L³/3EI = 1.6 mm at its end steepens it; measured 1.1 mm at 0.5 s).
+    Then ∂s/∂μ by forward mode against central differences of the scenario rebuilt at
+    μ ± 1e-4, and μ recovered to 1e-6 relative from a noise-free record of the
+    scenario rebuilt at μ = 0.23, from 0.1."""
+    path = tmp_path / "incline.toml"
+    path.write_text(_INCLINE)
+    t = np.arange(251) / RATE
+    probe = Measurements.from_arrays(t, np.zeros_like(t))
+
+    def run(mu):
+        """Reference: the scenario rebuilt at μ by ``--set``, run by a problem whose
+        parameter is the rail's α (0) without derivatives: μ is data of that program."""
+        pr = Problem.from_scenario(str(path), ("alpha",), output="s", overrides=[f"{MU}={mu!r}"])
+        grid, y, ok = pr.curves(pr.vector(), [probe], program="values")
+        assert ok[0]
+        return np.interp(t, grid, y[0])
+
+    problem = Problem.from_scenario(str(path), (MU,), output="s")
+    assert problem.units == ("-",) and problem.output.kind == "sliding"
+    r, jac, *_ = problem.evaluate(problem.vector(), [probe])
+    s, ds = r[0] * np.sqrt(len(t)), jac[0][:, 0] * np.sqrt(len(t))
+    np.testing.assert_allclose(s, run(0.2), rtol=0, atol=1e-10)
+    rigid = 0.1 + 0.5 * 9.81 * (np.sin(np.pi / 6) - 0.2 * np.cos(np.pi / 6)) * t ** 2
+    assert s[-1] - s[0] > 0.3 and np.max(np.abs(s - rigid)) < 1.6e-3
+    fd = (run(0.2 + 1e-4) - run(0.2 - 1e-4)) / 2e-4
+    scale = np.max(np.abs(ds))
+    assert np.max(np.abs(fd - ds)) <= 1e-5 * scale, np.max(np.abs(fd - ds)) / scale
+    res = fit(problem, Measurements.from_arrays(t, run(0.23), source="incline at mu = 0.23"), {MU: 0.1})
+    assert res.converged, res.stop_reason
+    assert res.estimates[0] == pytest.approx(0.23, rel=1e-6)

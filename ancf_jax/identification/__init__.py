@@ -27,7 +27,7 @@ from .parameters import Parameter
 from .problem import NUISANCE, Problem
 from .report import FitResult, ljung_box, misfit_diagnostics
 from .synthetic import synthesize
-from .uncertainty import bootstrap, profile
+from .uncertainty import bootstrap, profile, profile_interval
 
 __all__ = ["DataError", "Measurements", "read_csv", "write_csv", "Parameter", "Problem", "NUISANCE", "fit",
-           "fit_batch", "fit_joint", "JointProblem", "FitResult", "synthesize", "bootstrap", "profile", "ljung_box", "misfit_diagnostics"]
+           "fit_batch", "fit_joint", "JointProblem", "FitResult", "synthesize", "bootstrap", "profile", "profile_interval", "ljung_box", "misfit_diagnostics"]

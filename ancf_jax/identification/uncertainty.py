@@ -1,5 +1,6 @@
 """Uncertainty beyond Gauss–Newton: a parametric bootstrap as one vmapped batch, and
-the profile likelihood of one parameter (:func:`profile`).
+the profile likelihood of one parameter (:func:`profile`) and its interval
+(:func:`profile_interval`).
 
 The Gauss–Newton standard errors (:func:`~.report.gauss_newton_statistics`) linearise
 the model at the estimate and assume white noise of the size of the residual RMS. Near
@@ -121,3 +122,85 @@ def profile(problem: Problem, result, name: str, steps=(-1.5, 1.5), *,
                            profile_stderr=float(abs(value - result.estimates[k]) / np.sqrt(delta))
                            if delta > 0 else float("inf")))
     return dict(name=name, estimate=float(result.estimates[k]), gn_stderr=se, points=points)
+
+
+#: default level of :func:`profile_interval`: Δ = 4 is the likelihood-ratio counterpart of
+#: the Gauss–Newton interval p̂ ± 2 SE (χ²(1): 95.4 %)
+PROFILE_LEVEL = 4.0
+
+
+def profile_interval(problem: Problem, result, name: str, *, level: float = PROFILE_LEVEL, tol: float = 0.01,
+                     max_evaluations: int = 12, max_iterations: Optional[int] = None) -> dict:
+    """Profile-likelihood interval of one free parameter: on each side of p̂_k the value
+    where Δ(p_k) of :func:`profile` reaches ``level`` (default 4, the counterpart of
+    p̂ ± 2 SE). Each side starts at sqrt(level) Gauss–Newton standard errors, steps out
+    by factors of 2 until Δ ≥ level, and then solves sqrt(Δ) = sqrt(level) by regula
+    falsi (Illinois) on sqrt(Δ), which is linear in p_k where the linearisation holds
+    (one step then), to |sqrt(Δ) − sqrt(level)| <= ``tol`` within ``max_evaluations``
+    per side (else ModelError). For a positive parameter
+    (fitted on log p) whose profile stays below the level down to 1e-8 p̂, the lower end
+    is its bound 0 (``lower_at_bound``). Every side costs a few refits of the other
+    free parameters (the fit's compiled program).
+
+    Returns {name, estimate, gn_stderr, level, lower, upper, lower_at_bound,
+    gn_lower, gn_upper, evaluations: [{value, delta}]} in the parameter's unit; the
+    result is not changed."""
+    if not level > 0:
+        raise ModelError(f"profile_interval: level must be > 0 (Δ, a χ²(1) value), got {level}")
+    if int(max_evaluations) < 2:
+        raise ModelError(f"profile_interval: max_evaluations must be >= 2, got {max_evaluations}")
+    if name not in result.free:
+        raise ModelError(f"profile_interval: {name!r} is not a free parameter of the fit ({', '.join(result.free)})")
+    k = result.names.index(name)
+    p_hat, se = float(result.estimates[k]), float(result.stderr[k])
+    if not np.isfinite(se) or se <= 0:
+        raise ModelError(f"profile_interval: {name} has no finite standard error")
+    positive = bool(problem.log_scaled[k])
+    evaluations = []
+
+    def root(x: float) -> float:  # sqrt(Δ) − sqrt(level) at p_k = x
+        (pt,) = profile(problem, result, name, steps=((x - p_hat) / se,), max_iterations=max_iterations)["points"]
+        evaluations.append(dict(value=pt["value"], delta=pt["delta"]))
+        return float(np.sqrt(max(pt["delta"], 0.0)) - np.sqrt(level))
+
+    def side(sign: int):
+        """(end, at_bound) on one side."""
+        a, ga = p_hat, -float(np.sqrt(level))
+        b = p_hat + sign * np.sqrt(level) * se
+        first = len(evaluations)
+        while True:
+            if sign < 0 and positive and b <= 1e-8 * p_hat:
+                b = 1e-8 * p_hat
+                gb = root(b)
+                if gb < 0:
+                    return 0.0, True
+                break
+            gb = root(b)
+            if gb >= 0:
+                break
+            if len(evaluations) - first >= max_evaluations:
+                raise ModelError(f"profile_interval: Δ of {name} stays below {level:g} out to {b:g} "
+                                 f"({max_evaluations} evaluations)")
+            a, ga, b = b, gb, p_hat + 2 * (b - p_hat)
+        last = 0
+        while abs(gb) > tol:  # gb is always a true value (Illinois halves only ga)
+            if len(evaluations) - first >= max_evaluations:
+                raise ModelError(f"profile_interval: Δ of {name} = {level:g} not solved to {tol:g} in "
+                                 f"{max_evaluations} evaluations (near {b:g})")
+            c = b - gb * (b - a) / (gb - ga)
+            gc = root(c)
+            if gc * gb < 0:
+                a, ga = b, gb
+                last = 0
+            else:
+                if last:  # Illinois: halve the stale end's value
+                    ga /= 2
+                last = 1
+            b, gb = c, gc
+        return b, False
+
+    lower, at_bound = side(-1)
+    upper, _ = side(+1)
+    return dict(name=name, estimate=p_hat, gn_stderr=se, level=float(level), lower=float(lower),
+                upper=float(upper), lower_at_bound=at_bound, gn_lower=p_hat - np.sqrt(level) * se,
+                gn_upper=p_hat + np.sqrt(level) * se, evaluations=evaluations)
