@@ -39,6 +39,9 @@ EXTRA = ("batch_gpu", "batch_gpu_dense")
 #: written by ``python -m benchmarks.step_profile`` (not by benchmarks.run); rendered
 #: after the single runs
 PROFILE = "step_profile"
+#: written by ``python -m benchmarks.pantograph_catenary`` (issue 21; not by
+#: benchmarks.run); rendered last, with its own targets
+PANTOGRAPH = "pantograph_catenary"
 
 
 
@@ -50,7 +53,7 @@ def _dense(options) -> bool:
 
 def load(results: Path) -> dict:
     out = {}
-    for name in SECTIONS + EXTRA + (PROFILE,):
+    for name in SECTIONS + EXTRA + (PROFILE, PANTOGRAPH):
         p = results / f"{name}.json"
         if p.exists():
             out[name] = json.loads(p.read_text())
@@ -730,6 +733,66 @@ def sec_compile(d):
     return "".join(out)
 
 
+def pantograph_targets(d) -> list:
+    """Issue 21's targets from pantograph_catenary.json: [target, limit, measured,
+    verdict, what it is made of]."""
+    rows = []
+    full = {r["statistics"]["speed_kmh"]: r for r in d.get("full", {}).get("runs", [])}
+    r = full.get(250.0)
+    if r:
+        end_to_end = (r["build_and_statics_s"] + r["compile_s"] + r["wall_s"]) / r["simulated_s"]
+        rows.append(["real-time factor of the full 10-span run at 250 km/h (wall / simulated time, 2 cores)",
+                     "≤ 10", f"{r['real_time_factor']:.2f}", "met" if r["real_time_factor"] <= 10 else "missed",
+                     f"time stepping: {r['wall_s']:.1f} s for {r['simulated_s']:.2f} s, {r['steps']} steps; "
+                     f"without the build and static solve ({r['build_and_statics_s']:.1f} s) and the compile "
+                     f"({r['compile_s']:.1f} s): end to end {end_to_end:.1f}"
+                     + (f"; 300 km/h: {full[300.0]['real_time_factor']:.2f}" if 300.0 in full else "")])
+    else:
+        rows.append(["real-time factor of the full run at 250 km/h", "≤ 10", "–", "not measured", "not run"])
+    s = d.get("scaling_shipped") or d.get("scaling")
+    if s:
+        e = [x["elements"] for x in s["runs"]]
+        where = ("at the shipped step and solver" if "scaling_shipped" in d else
+                 "at h = 1 ms with factors every step, not the shipped 2 ms / factors carried up to 16 steps / "
+                 "tolerance 1e-7 m (`python -m benchmarks.pantograph_catenary scaling_shipped`)")
+        rows.append(["cost per step ∝ elements^p, up to ≥ 2,400 elements", "p ≤ 1", f"{s['exponent']:.2f}",
+                     ("met" if s["exponent"] <= 1 and max(e) >= 2400 else "missed") if "scaling_shipped" in d
+                     else "measured at other settings",
+                     f"{e} elements {where}; marginal cost {s['marginal_us_per_element']:.1f} µs per element-step"])
+    for part, model in (("batch_full", "shipped 10-span model"), ("batch", "reduced catenary (3 × 10 m): "
+                                                                           "not the full model")):
+        b = d.get(part)
+        if b:
+            rows.append([f"vmapped batch of {len(b['speeds_kmh'])} speeds against as many single runs", "reported",
+                         f"{b['batch_wall_s']:.1f} s vs {b['singles_wall_s']:.1f} s", "reported",
+                         f"{model}, {b['steps']} steps; results equal to {b['max_q_difference_m']:.0e} m"])
+            break
+    for v, r in sorted(full.items()):
+        verdicts = r.get("en50318_2002") or []
+        inside = [x["key"] for x in verdicts if x["inside"]]
+        rows.append([f"statistics inside the EN 50318:2002 ranges at {v:g} km/h, or the docs say why not", "all",
+                     f"{len(inside)} of {len(verdicts)}", "outside: explained in docs/pantograph-catenary.md "
+                     "(model data)" if len(inside) < len(verdicts) else "met", "inside: " + (", ".join(inside) or
+                                                                                             "none")])
+    conv = [name for name, part in (("mesh and step on the reduced catenary", "convergence"),
+                                    ("step on the full model", "full_steps"),
+                                    ("mesh on the full model", "full_mesh")) if part in d]
+    rows.append(["mesh and step convergence of the statistics shown", "shown", ", ".join(conv) or "–",
+                 "shown" if conv else "not measured",
+                 "" if "full_mesh" in d else "no mesh study on the full model yet "
+                 "(`python -m benchmarks.pantograph_catenary full_mesh`)"])
+    return rows
+
+
+def sec_pantograph(d) -> str:
+    """Issue 21: the targets, then the benchmark's own tables (its ``markdown``)."""
+    from .pantograph_catenary import markdown
+    return ("## Pantograph–catenary at full scale (issue 21)\n\n"
+            + table(["target", "limit", "measured", "verdict", "what it is made of"], pantograph_targets(d))
+            + "\n" + markdown(d) + "\n\n_Command: `python -m benchmarks.pantograph_catenary [PART ...]` "
+            f"(parts: {', '.join(k for k in d if k != 'stamp')}); {d.get('stamp', {}).get('date', '?')}._\n")
+
+
 def render(results: Path | None = None, out: Path | None = None) -> Path:
     """Write RESULTS.md (default: benchmarks/RESULTS.md, or RESULTS.md inside a
     redirected results folder) and the plots from the JSON files in ``results``."""
@@ -769,6 +832,8 @@ def render(results: Path | None = None, out: Path | None = None) -> Path:
             parts.append(sec_loop_kernels(_loop_kernels()) + "\n")
         if name == "batch":
             parts += [sec_batch_gpu(data[g], data.get("batch")) + "\n" for g in EXTRA if g in data]
+    if PANTOGRAPH in data:
+        parts.append(sec_pantograph(data[PANTOGRAPH]) + "\n")
     out.write_text("".join(parts))
     return out
 

@@ -260,3 +260,42 @@ def test_coverage_fit_formulation_is_the_records_element():
 
     assert element("exudyn") == cable_formulation(2)
     assert element("default") != cable_formulation(2) and formulation_overrides("default") == ()
+
+
+def test_report_pantograph_section_from_its_json(tmp_path):
+    """RESULTS.md's issue-21 section from the committed pantograph_catenary.json alone:
+    the real-time factor's verdict and its end-to-end figure, the scaling flagged as run
+    at other settings than the shipped ones until ``scaling_shipped`` exists (then its
+    verdict), the batch named as the reduced model's until ``batch_full`` exists, the
+    statistics' verdicts counted, and the benchmark's own tables."""
+    from pathlib import Path
+    data = json.loads((Path(report.DEFAULT_RESULTS) / "pantograph_catenary.json").read_text())
+    (tmp_path / "pantograph_catenary.json").write_text(json.dumps(data))
+    text = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
+    rows = {ln.split("|")[1].strip(): ln for ln in text.splitlines() if ln.startswith("| ")}
+    rtf = next(v for k, v in rows.items() if k.startswith("real-time factor of the full"))
+    assert "| ≤ 10 | 8.69 | met |" in rtf and "end to end 13.5" in rtf
+    assert "measured at other settings" in next(v for k, v in rows.items() if k.startswith("cost per step"))
+    assert "reduced catenary (3 × 10 m): not the full model" in text
+    assert "| 1 of 8 | outside" in next(v for k, v in rows.items() if k.endswith("at 250 km/h, or the docs say why not"))
+    assert "Convergence (3 spans of 10 m" in text and "Shipped model at 250 km/h by step" in text
+    data["scaling_shipped"] = dict(data["scaling"], exponent=0.9, settings={})
+    data["batch_full"] = dict(data["batch"], coordinates=9617, overrides=[], dt=2e-3)
+    (tmp_path / "pantograph_catenary.json").write_text(json.dumps(data))
+    text = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
+    assert "| p ≤ 1 | 0.90 | met |" in text and "at the shipped step and solver" in text
+    assert "shipped 10-span model, 300 steps" in text
+    assert "the shipped scenario's step and solver: h = 2 ms" in text
+
+
+def test_recorded_speed_batches_equal_their_single_runs():
+    """The vmapped batches of speeds that pantograph_catenary.json records (the reduced
+    catenary's, and the shipped model's once run) equal their single runs: the largest
+    difference of q within 1e-9 m (recorded 6e-14 m). The run itself is the benchmark's
+    (``batch``): in the suite it would compile a vmapped catenary program, ~50 CPU s
+    (measured), beyond the suite's budget."""
+    from pathlib import Path
+    data = json.loads((Path(report.DEFAULT_RESULTS) / "pantograph_catenary.json").read_text())
+    recorded = [data[p] for p in ("batch", "batch_full") if p in data]
+    assert recorded and all(len(b["speeds_kmh"]) == 8 for b in recorded)
+    assert all(0.0 <= b["max_q_difference_m"] < 1e-9 for b in recorded), recorded

@@ -17,6 +17,8 @@
 Programs are shared: the static solves and the runs pad both wires to one element count.
 """
 
+import dataclasses
+
 import jax.numpy as jnp
 import numpy as np
 import pytest
@@ -33,19 +35,36 @@ from .beam_theory import moving_load_series
 RUN = dict(spans=3, span_length=10.0, droppers=(2.0, 5.0, 8.0))
 
 
-def test_design_equilibrium_balances_the_weights():
-    """Vertical reactions (messenger supports, contact-wire ends) equal the weight of
-    the wires (unstretched lengths × ρA g), clamps and droppers: to 1e-5 (the
-    boundary layers shorten the wires by ~2 mm over 600 m, which the strings' weight
-    does not see; 2e-6 of it); the droppers are taut and longer at the poles than at
-    mid-span (the messenger sags)."""
-    d = CatenaryDesign()
-    eq = design_equilibrium(d)
+def _balance_error(d, eq):
+    """Relative difference of the vertical reactions (messenger supports, contact-wire
+    ends) from the weight of the wires (unstretched lengths × ρA g), clamps and
+    droppers in the design equilibrium ``eq`` of ``d``."""
     weight = G * (d.contact.mass_per_length * eq.contact_rest.sum() + d.messenger.mass_per_length
                   * eq.messenger_rest.sum() + len(eq.dropper_force) * (
                       d.dropper_mass + d.contact_clamp_mass + d.messenger_clamp_mass))
-    reactions = eq.support_force.sum() + eq.contact_end_force.sum()
-    assert abs(reactions - weight) < 1e-5 * weight
+    return abs(eq.support_force.sum() + eq.contact_end_force.sum() - weight) / weight
+
+
+def _contact_mass(d):
+    """Mass lumped on the contact wire at a dropper [kg]: its clamp and half the dropper."""
+    return d.contact_clamp_mass + 0.5 * d.dropper_mass
+
+
+def test_design_equilibrium_balances_the_weights():
+    """Vertical reactions equal the weights (:func:`_balance_error`): to 1e-5 (the
+    boundary layers shorten the wires by ~2 mm over 600 m, which the strings' weight
+    does not see; 2e-6 of it); the droppers are taut and longer at the poles than at
+    mid-span (the messenger sags).
+
+    The level contact wire (no pre-sag) by hand: each segment between key points is a
+    symmetric catenary, so each dropper carries the weight of half the wire on either
+    side, w (s₀,left + s₀,right) / 2, plus the clamp and half the dropper, with the
+    unstretched length s₀ ≈ dx / (1 + H/EA): to 2e-6 (the chord neglects the arc of
+    the sag, a relative (w s₀ / 2H)² / 6 = 1.8e-6 on the 10 m segments across a pole;
+    leaving out the clamps would be 5 % off, the stretch 1.7e-3)."""
+    d = CatenaryDesign()
+    eq = design_equilibrium(d)
+    assert _balance_error(d, eq) < 1e-5
     assert np.all(eq.dropper_force > 0)
     mid = len(d.droppers) // 2
     assert eq.dropper_length[0] > eq.dropper_length[mid] < eq.dropper_length[len(d.droppers) - 1]
@@ -54,13 +73,46 @@ def test_design_equilibrium_balances_the_weights():
     lam = np.sqrt(d.messenger.bending_stiffness / d.messenger.tension)
     top = d.height + d.encumbrance - eq.support_force[1:-1] * lam / (2 * d.messenger.tension)
     np.testing.assert_allclose(eq.messenger_nodes[eq.pole_nodes[1:-1], 1], top, atol=1e-9)
+    c = d.contact
+    key = np.concatenate([eq.x[:1], eq.x[eq.dropper_nodes], eq.x[-1:]])
+    s0 = np.diff(key) / (1 + c.tension / c.axial_stiffness)
+    hand = c.mass_per_length * G * (s0[:-1] + s0[1:]) / 2 + _contact_mass(d) * G
+    np.testing.assert_allclose(eq.dropper_force, hand, rtol=2e-6, atol=0)
 
 
-def static_dropper_errors(element_length):
-    """Largest relative dropper-force error and height change [m] of the static solve
-    from the design state (the run's catenary and program, the pantograph's uplift
-    made negligible)."""
-    design = CatenaryDesign(element_length=element_length, alpha=0.06, beta=7.6e-5, **RUN)
+def test_presag_puts_the_contact_wire_on_its_parabola():
+    """Pre-sag p ≠ 0 on the small catenary (p = 5 mm on 10 m spans: with droppers at
+    2, 5 and 8 m, p above wL²/8H ≈ 8 mm would need droppers to push): the contact wire
+    passes through the design heights 4 p ξ(1 − ξ) below ``height`` at the droppers,
+    less the rounding of each dropper's pull F λ / 2H (as the messenger at the poles),
+    to 1e-9 m; the weights still balance; and by hand, the pre-sag moves each
+    dropper's force from the level wire's by H times the kink of the key points'
+    polyline there, H (Δy/Δx left − Δy/Δx right): −24 N at mid-span, +12 N next to
+    the poles (to 1e-4 N; measured 2e-5 N, the weight of the slightly longer sloped
+    segments)."""
+    d = CatenaryDesign(presag=0.005, element_length=0.5, **RUN)
+    level = design_equilibrium(dataclasses.replace(d, presag=0.0))
+    eq = design_equilibrium(d)
+    c = d.contact
+    xi = np.mod(eq.x[eq.dropper_nodes], d.span_length) / d.span_length
+    lam = np.sqrt(c.bending_stiffness / c.tension)
+    rounding = (eq.dropper_force - _contact_mass(d) * G) * lam / (2 * c.tension)
+    design = d.height - 4 * d.presag * xi * (1 - xi) - rounding
+    np.testing.assert_allclose(eq.contact_nodes[eq.dropper_nodes, 1], design, rtol=0, atol=1e-9)
+    assert np.ptp(eq.contact_nodes[eq.dropper_nodes, 1]) > 1.5e-3  # the sag: 4p (ξ(1 − ξ) at 0.5 less at 0.2)
+    assert _balance_error(d, eq) < 1e-5
+    x = np.concatenate([eq.x[:1], eq.x[eq.dropper_nodes], eq.x[-1:]])
+    y = np.concatenate([[0.0], -4 * d.presag * xi * (1 - xi), [0.0]])  # key points, the pinned ends at 0
+    slope = np.diff(y) / np.diff(x)
+    np.testing.assert_allclose(eq.dropper_force - level.dropper_force, c.tension * (slope[:-1] - slope[1:]),
+                               rtol=0, atol=1e-4)
+
+
+def static_dropper_errors(element_length, presag=0.0):
+    """Largest relative dropper-force error (with ``presag``: largest error [N]) and
+    height change [m] of the static solve from the design state (the run's catenary
+    and program, the pantograph's uplift made negligible)."""
+    design = CatenaryDesign(element_length=element_length, alpha=0.06, beta=7.6e-5, presag=presag, **RUN)
     m, names = pantograph_catenary(design, PantographDesign(uplift=1e-3), speed=250 / 3.6)
     system, guess = m.build(assemble=False, pad_to=60)
     state, _ = moving_equilibrium(system, guess)
@@ -68,6 +120,8 @@ def static_dropper_errors(element_length):
     droppers = next(f for f in system.forces if f.name == "catenary.droppers")
     tension = np.asarray(droppers.member_forces(system, q, jnp.zeros_like(q)))
     dy = max(float(jnp.max(jnp.abs(system.beam_nodes(q - guess.q, b)[:, 1]))) for b in range(2))
+    if presag:  # the largest error [N] (relative errors grow where the forces are small)
+        return np.max(np.abs(tension - names.design.dropper_force)), dy
     return np.max(np.abs(tension / names.design.dropper_force - 1)), dy
 
 
@@ -91,10 +145,15 @@ def test_static_dropper_forces_match_the_hand_equilibrium():
     droppers, support springs) from the design state moves it by the mesh error only:
     dropper forces and heights converge to the hand values (measured: 2.0 %, 0.53 %,
     0.079 % and 0.84, 0.23, 0.04 mm at 1, 0.5, 0.25 m elements; 5e-5 and 0.01 mm at
-    0.125 m on 60 m spans)."""
+    0.125 m on 60 m spans). With a pre-sag of 5 mm (the wire on its parabola) the
+    static solve stays within the same bounds at 0.5 m (same program): heights, and
+    forces within 1 % of the largest dropper force, 0.48 N (measured 0.41 N, and 1.52 N
+    at 1 m: the ratio 3.7 of the level wire; 1.9 % of the end droppers' 15 N)."""
     (f1, y1), (f2, y2) = static_dropper_errors(1.0), static_dropper_errors(0.5)
     assert f2 < 1e-2 and y2 < 5e-4, (f2, y2)
     assert f1 / f2 > 3 and y1 / y2 > 3, (f1, f2, y1, y2)
+    fp, yp = static_dropper_errors(0.5, presag=0.005)
+    assert fp < 1e-2 * 48.5 and yp < 5e-4, (fp, yp)
 
 
 def test_moving_force_on_the_builders_contact_wire():
@@ -163,8 +222,32 @@ def test_contact_force_against_the_fine_run_of_itself(small_runs):
     assert 0.5 < d < 4.0, d  # a difference that vanished would mean the runs were not refined
     for key in ("mean_N", "std_N", "max_N", "min_N"):
         assert abs(coarse.statistics[key] - fine.statistics[key]) < 3.0, key
+    # uplift at the support [mm]: 17.9, 18.5 at 1 and 0.5 m in the study (18.6 at 0.125 m)
+    uplift = coarse.statistics["uplift_support_mm"], fine.statistics["uplift_support_mm"]
+    assert uplift[1] > 1.0 and abs(uplift[0] - uplift[1]) < 1.5, uplift
     assert fine.statistics["contact_loss_pct"] == 0.0 == coarse.statistics["contact_loss_pct"]
     assert coarse.statistics["spans_evaluated"] == [2, 2]
+
+
+def test_against_ranges_gives_the_verdicts():
+    """against_ranges: values inside, on either bound and outside the EN 50318:2002
+    ranges at 250 and 300 km/h get the right verdicts (bounds are inside); other
+    speeds, 275 or 250.5 km/h, have no ranges (None)."""
+    from ancf_jax.models.catenary import EN50318_2002_RANGES, against_ranges
+    for speed, ranges in EN50318_2002_RANGES.items():
+        for pick, inside in ((lambda lo, hi: 0.5 * (lo + hi), True), (lambda lo, hi: lo, True),
+                             (lambda lo, hi: hi, True), (lambda lo, hi: lo - 0.01, False),
+                             (lambda lo, hi: hi + 0.01, False)):
+            stats = dict(speed_kmh=float(speed), **{k: pick(*r) for k, r in ranges.items()})
+            rows = against_ranges(stats)
+            assert [row["key"] for row in rows] == list(ranges)
+            assert all(row["inside"] is inside and row["value"] == stats[row["key"]] for row in rows), (speed, rows)
+            assert all((row["low"], row["high"]) == ranges[row["key"]] for row in rows)
+    assert EN50318_2002_RANGES[250]["std_N"] == (26, 31) and EN50318_2002_RANGES[300]["stat_min_N"] == (-5, 20)
+    mixed = dict({k: lo for k, (lo, hi) in EN50318_2002_RANGES[250].items()}, speed_kmh=250.0, mean_N=109.0)
+    assert [row["key"] for row in against_ranges(mixed) if not row["inside"]] == ["mean_N"]
+    for speed in (275.0, 250.5, 200.0):
+        assert against_ranges(dict(mixed, speed_kmh=speed)) is None
 
 
 def test_statistics_of_a_known_signal():
@@ -217,6 +300,23 @@ def test_shipped_scenario_is_the_python_model_and_the_cli_writes_the_contract(sm
     assert header == "t,x,contact_force_N,contact_force_filtered_N"
     for fig in ("contact_force.png", "uplift.png", "dropper_slack.png"):
         assert (tmp_path / fig).stat().st_size > 0
+
+
+def test_the_checks_use_the_pantograph_runs_end():
+    """A pantograph run ends before solver.t_end (one span past the evaluated ones):
+    the scenario's run and the checker's time grids end at the same time
+    (:func:`~ancf_jax.scenario.build.run_end`), and an output interval longer than
+    the run but shorter than solver.t_end is refused, naming the run time."""
+    from ancf_jax.scenario import load_scenario
+    from ancf_jax.scenario.checks import Checker
+    from ancf_jax.scenario.errors import ScenarioError
+    sc = load_scenario("pantograph_catenary", SCENARIO_RUN)
+    end, checker = sc.solver.t_end, Checker(sc.spec)
+    assert end < 0.5 * sc.spec.solver.t_end and checker.run_end() == end
+    assert checker.output_times()[-1] == pytest.approx(end, rel=1e-12)
+    assert checker.step_times()[-1] == pytest.approx(end, rel=1e-12)
+    with pytest.raises(ScenarioError, match="longer than the run, the pantograph's run time"):
+        load_scenario("pantograph_catenary", SCENARIO_RUN + [f"outputs.dt={end + 0.5:g}"])
 
 
 def _static(design, pantograph, *, speed, start=None, trailing=(), uplifts=None):

@@ -152,6 +152,13 @@ def pantograph_run_time(spec: S.ScenarioSpec) -> float:
                     trailing=p.trailing or (), spans=p.spans, cutoff=p.cutoff, t_end=spec.solver.t_end)
 
 
+def run_end(spec: S.ScenarioSpec) -> float:
+    """End time [s] of the scenario's run: ``solver.t_end``, or for a pantograph run
+    the earlier :func:`pantograph_run_time` (the run that :class:`~.scenario.Scenario`
+    makes and the time grid that the checks evaluate the time functions on)."""
+    return spec.solver.t_end if spec.pantograph is None else pantograph_run_time(spec)
+
+
 def make_model(spec: S.ScenarioSpec, file: str = "") -> Model:
     """The :class:`Model` of a checked scenario (host work plus small eager JAX ops
     to place bodies on beams; nothing is compiled for the system)."""

@@ -513,7 +513,7 @@ class Checker:
                 key = "start" if i == 0 else ("speed" if mm.profile is None else "profile")
                 raise Invalid(path + (key,), f'the mass is off beam "{mm.beam}" at t = {times[i]:g} s '
                               f"({what} {p[i]:g} m)", f"a path with {what} in {lo:g} .. {hi:g} [m] at every "
-                              f"output time 0 .. {self.spec.solver.t_end:g} s")
+                              f"output time 0 .. {self.run_end():g} s")
 
     def chains(self):
         for name, c in self.spec.chains.items():
@@ -549,7 +549,7 @@ class Checker:
                 i = int(np.argmax(bad))
                 raise Invalid(path + ("profile",), f"{item.profile.text!r} is not finite at t = {times[i]:g} s "
                               f"(value {values[i]})", "a time function finite at every output time "
-                              f"0 .. {self.spec.solver.t_end:g} s [m]")
+                              f"0 .. {self.run_end():g} s [m]")
 
     def solver(self):
         sol = self.spec.solver
@@ -557,15 +557,23 @@ class Checker:
         if out is not None and out < sol.dt * (1 - 1e-9):
             raise Invalid(("outputs", "dt"), f"{out:g} s is shorter than solver.dt = {sol.dt:g} s",
                           f"a number >= {sol.dt:g} [s]")
-        if out is not None and out > sol.t_end * (1 + 1e-9):
-            raise Invalid(("outputs", "dt"), f"{out:g} s is longer than the run, solver.t_end = {sol.t_end:g} s",
-                          f"a number in {sol.dt:g} .. {sol.t_end:g} [s]")
+        end = self.run_end()
+        if out is not None and out > end * (1 + 1e-9):
+            what = "solver.t_end" if end == sol.t_end else "the pantograph's run time"
+            raise Invalid(("outputs", "dt"), f"{out:g} s is longer than the run, {what} = {end:g} s",
+                          f"a number in {sol.dt:g} .. {end:g} [s]")
+
+    def run_end(self) -> float:
+        """End time [s] of the run (:func:`~.build.run_end`: a pantograph run ends
+        before ``solver.t_end``); the catenary checks come first."""
+        from .build import run_end
+        return run_end(self.spec)
 
     def _time_grid(self):
         """:func:`ancf_jax.simulation.time_grid` of the run (an output interval shorter
         than the step, refused by :meth:`solver`, taken as the step here)."""
         sol, out = self.spec.solver, self.spec.outputs.dt
-        return time_grid(sol.t_end, sol.dt, None if out is None else max(out, sol.dt))
+        return time_grid(self.run_end(), sol.dt, None if out is None else max(out, sol.dt))
 
     def output_times(self) -> np.ndarray:
         """The run's output times [s] (t = 0, every outputs.dt, t_end), as
@@ -573,7 +581,7 @@ class Checker:
         :data:`MAX_CHECKED_TIMES` of them (evenly spread) on a longer grid."""
         n, _, _, out_dt = self._time_grid()
         if n + 1 > MAX_CHECKED_TIMES:
-            return np.linspace(0.0, self.spec.solver.t_end, MAX_CHECKED_TIMES)
+            return np.linspace(0.0, self.run_end(), MAX_CHECKED_TIMES)
         return out_dt * np.arange(n + 1)
 
     def step_times(self) -> np.ndarray:
@@ -583,7 +591,7 @@ class Checker:
         n, sub, h, _ = self._time_grid()
         steps = n * sub
         if steps + 1 > MAX_CHECKED_STEPS:
-            return np.linspace(0.0, self.spec.solver.t_end, MAX_CHECKED_STEPS)
+            return np.linspace(0.0, self.run_end(), MAX_CHECKED_STEPS)
         return h * np.arange(steps + 1)
 
     def time_functions(self):
@@ -591,7 +599,6 @@ class Checker:
         (a step between output times is where the solver evaluates it too: 1/(t − 0.005)
         with outputs every 0.01 s and steps of 0.001 s is infinite at the fifth step)."""
         times = np.unique(np.concatenate([self.step_times(), self.output_times(), [self.spec.statics.time]]))
-        sol = self.spec.solver
         for group in ("moving_masses", "chains", "joints", "loads"):
             for name, item in getattr(self.spec, group).items():
                 nested = getattr(item, "drive", None)
@@ -607,7 +614,7 @@ class Checker:
                         i = int(np.argmax(bad))
                         raise Invalid((group, name, key), f"{f.text!r} is not finite at t = {times[i]:g} s "
                                       f"(value {values[i]})", "a time function finite at every time step "
-                                      f"and output time 0 .. {sol.t_end:g} s and at statics.time [s]")
+                                      f"and output time 0 .. {self.run_end():g} s and at statics.time [s]")
 
     def outputs(self):
         for name, o in self.spec.outputs.columns.items():

@@ -20,7 +20,7 @@ from ..outputs import Output
 from ..results import Results
 from ..system import State, System
 from . import schema as S
-from .build import make_model, make_outputs, pantograph_run_time
+from .build import make_model, make_outputs, run_end
 from .geometry import element_count
 
 
@@ -93,11 +93,8 @@ class Scenario:
         s = self.spec.solver
         table = getattr(s, S.SOLVER_TABLES[s.name])
         options = {k: v for k, v in table.model_dump().items() if v is not None}
-        t_end = s.t_end
-        if self.spec.pantograph is not None:
-            # the run ends one span past the evaluated ones (solver.t_end: at most)
-            t_end = min(t_end, pantograph_run_time(self.spec))
-        return RunSettings(s.name, s.dt, t_end, self.spec.outputs.dt, options, s.drift_tolerance,
+        # a pantograph run ends one span past the evaluated ones (solver.t_end: at most)
+        return RunSettings(s.name, s.dt, run_end(self.spec), self.spec.outputs.dt, options, s.drift_tolerance,
                            s.locate_crossings)
 
     @property
