@@ -17,6 +17,8 @@ iterations per step as with a built-in spring, where the old matrix (force eleme
 left out, :class:`WithoutTangent`) needs tens of times more.
 """
 
+from typing import ClassVar
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -24,6 +26,7 @@ import numpy as np
 import pytest
 
 from ancf_jax import dae
+from ancf_jax.joints import AbstractConstraint
 from ancf_jax.forces import AbstractConservativeForce, AbstractForce, PointForce, SpringDamper
 from ancf_jax.models.m1 import m1_model
 from ancf_jax.models.m2 import m2_initial
@@ -179,6 +182,49 @@ def test_iteration_matrix_is_the_jacobian_of_the_residual(case):
     scale = jnp.max(jnp.abs(reference))
     assert structured.shape == reference.shape
     np.testing.assert_allclose(structured / scale, reference / scale, rtol=0, atol=1e-13)
+
+
+class BeamPointDistance(AbstractConstraint):
+    """|r_a − r_b| − ℓ = 0 between two beam points: nonlinear in the beam coordinates,
+    and not declared linear (the default of a user's joint)."""
+
+    a: BeamPoint
+    b: BeamPoint
+    length: float
+    size: ClassVar[int] = 1
+
+    def residual(self, system, q, t):
+        d = self.a.position(system, q) - self.b.position(system, q)
+        return jnp.reshape(jnp.sqrt(d @ d) - self.length, (1,))
+
+
+def test_joints_are_linear_in_the_beam_coordinates_or_refused():
+    """The Newton matrix leaves out the chain–chain block of (λ·Φ)_qq. The shipped joints
+    of M1 and M2 (clamp, fixed joint, pins, sliding joint), declared linear in the beam
+    coordinates, have zero second derivative along a random beam direction at a moving
+    state; a distance joint has not (the check detects it), and the Newton matrix
+    refuses it, naming it, rather than leave its Hessian out."""
+    from ancf_jax.errors import ModelError
+    from ancf_jax.joints import linear_in_beam_coordinates
+
+    def curvature(system, c, q, w):
+        def slope(x):
+            return jax.jvp(lambda z: c.residual(system, z, 0.1), (x,), (w,))[1]
+        return float(jnp.max(jnp.abs(jax.jvp(slope, (q,), (w,))[1])))
+
+    for system, state in (m1_model().build(), m2_initial(n_elements=12)[:2]):
+        q, _, _ = perturbed(system, state, 5)
+        w = jnp.zeros_like(q).at[system.chain_indices()].set(
+            jax.random.normal(jax.random.PRNGKey(6), (system.chain_size,)))
+        for c in system.constraints:
+            assert linear_in_beam_coordinates(c)
+            assert curvature(system, c, q, w) < 1e-12, c.name
+    distance = BeamPointDistance("strut", BeamPoint(0, jnp.asarray(0.1)), BeamPoint(0, jnp.asarray(0.3)), 0.2)
+    assert not linear_in_beam_coordinates(distance)
+    assert curvature(system, distance, q, w) > 1e-3
+    system = eqx.tree_at(lambda s: s.constraints, system, (*system.constraints, distance))
+    with pytest.raises(ModelError, match="joint 'strut' .BeamPointDistance.: the Newton matrix needs joints linear"):
+        dae.iteration_matrix(system, q, q, jnp.zeros(system.n_constraints), 0.1, 1.0, 1.0, None)
 
 
 def test_rate_stiffness_switch():
