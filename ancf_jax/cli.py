@@ -28,6 +28,7 @@ from pathlib import Path
 
 from ._version import __version__
 from .errors import ModelError, StaticsError
+from .failures import Failure
 
 class _Parser(argparse.ArgumentParser):
     """argparse with one-line errors: ``ancf-jax run: error: argument --t-end: ...``."""
@@ -488,7 +489,7 @@ def _problems(command: str, runs: dict) -> int:
     for k, r in bad.items():
         print(f"ancf-jax {command}: {'' if k == '' else f'{k} elements: '}{r.message} "
               f"(results up to then are written)", file=sys.stderr)
-    if any(r.status == "interrupted" for r in bad.values()):
+    if any(r.status == Failure.INTERRUPTED.reason for r in bad.values()):
         return 130
     return 1 if bad else 0
 
@@ -672,7 +673,7 @@ def _run_speeds(args, speeds, overrides, extra) -> int:
         if r.status != "ok":
             print(f"ancf-jax run: {p.speed_kmh:g} km/h: {r.message} (results up to then are written)",
                   file=sys.stderr)
-            status = 130 if r.status == "interrupted" else max(status, 1)
+            status = 130 if r.status == Failure.INTERRUPTED.reason else max(status, 1)
         if args.vtk:
             from .sweep.vtk import write_vtk
             print(f"VTK: {write_vtk(r, out / label / 'vtk', name=f'{base.name}_{label}')}")
@@ -724,7 +725,7 @@ def _fatigue(args) -> int:
           f"{r.wall_time_s:.2f} s -> {out}/")
     if r.status != "ok":
         print(f"ancf-jax fatigue: {r.message} (damage of the run up to then is written)", file=sys.stderr)
-        return 130 if r.status == "interrupted" else 1
+        return 130 if r.status == Failure.INTERRUPTED.reason else 1
     return 0
 
 

@@ -28,7 +28,9 @@ import numpy as np
 
 from .linalg import (AbstractSaddleSolver, AutoSaddleSolver, BlockTridiagonal, SaddleFactor, SaddleMatrix,
                      factor_chain, solve_symmetric_implicit)
+from .errors import ModelError
 from .forces import AbstractForceSet, force_tangent, force_tangent_local, reaction_force_tangent
+from .joints import linear_in_beam_coordinates
 from .newton import ModifiedNewton
 from .system import System
 
@@ -108,12 +110,25 @@ def powers(system: System, q, v, t, lam):
 
 
 #: fixed-point iterations on λ of the index-1 accelerations of systems with
-#: reaction-dependent forces (friction): the error falls by about μ each
+#: reaction-dependent forces (friction). A fixed count, not a loop to a tolerance, so
+#: that the accelerations stay reverse-differentiable and vmappable at a fixed cost.
+#: The map λ ↦ solve(Q + Q_r(λ)) contracts by the coupling of a tangential friction
+#: force to the normal reaction, which is small: a tangential force on a beam point
+#: moves it along the beam only (the ANCF mass is the same in x and y), so only the
+#: bodies couple it. Measured (hauled_cabin, the frictional eyelets of
+#: benchmarks/eyelets.py, M2's trolley and cabin, μ from 0.05 to 3, mid-run states):
+#: exact after one iteration where the force acts on a beam or a driven body, a
+#: contraction of ~1e-3 per iteration for M2's swinging cabin at μ = 3, so 12 reach
+#: rounding (tests/models/test_m2.py::test_friction_reaction_fixed_point_converges).
+#: A body whose coupling contracts by more than ~0.05 (a sliding point far from a
+#: light body's centre) would leave a λ error of that factor to the 12th power, and a
+#: coupling of 1 or more diverges to a "nan" failure.
 REACTION_ITERATIONS = 12
 
 
 def accelerations(system: System, q, v, t, *, baumgarte: float = 0.0, chain_factor=None,
-                  linear_solver: AbstractSaddleSolver = AutoSaddleSolver()):
+                  linear_solver: AbstractSaddleSolver = AutoSaddleSolver(),
+                  reaction_iterations: int = REACTION_ITERATIONS):
     """Accelerations q̈ and multipliers λ of the index-1 form (module docstring).
 
     Args:
@@ -121,6 +136,8 @@ def accelerations(system: System, q, v, t, *, baumgarte: float = 0.0, chain_fact
             (0: none).
         chain_factor: precomputed factors of the beam mass (it is constant).
         linear_solver: solver of the saddle system.
+        reaction_iterations: fixed-point iterations on λ where forces depend on it
+            (friction; :data:`REACTION_ITERATIONS`).
 
     Returns:
         (q̈ (n,), λ (m,)).
@@ -135,12 +152,12 @@ def accelerations(system: System, q, v, t, *, baumgarte: float = 0.0, chain_fact
     x = linear_solver.compute(f, to_solver_order(system, rhs_q, gamma))
     if system.reaction_forces:
         # friction depends on λ: fixed-point iteration λ ↦ Q_r(λ) ↦ solve, with the same
-        # factors (contracts by about μ per iteration; REACTION_ITERATIONS of them)
+        # factors (REACTION_ITERATIONS of them: why that suffices is written there)
         def again(_, x):
             _, lam = from_solver_order(system, x)
             return linear_solver.compute(f, to_solver_order(
                 system, rhs_q + system.reaction_force(q, v, t, lam), gamma))
-        x = jax.lax.fori_loop(0, REACTION_ITERATIONS, again, x)
+        x = jax.lax.fori_loop(0, reaction_iterations, again, x)
     return from_solver_order(system, x)
 
 
@@ -226,8 +243,17 @@ def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac, load_fa
       term (auxiliary unknowns of :class:`SaddleMatrix`), so a spring between any two
       points, or a user-written law, is in the matrix.
 
-    ``load_factor`` scales the applied loads (statics' load stepping).
+    ``load_factor`` scales the applied loads (statics' load stepping). Raises
+    :class:`~ancf_jax.errors.ModelError` (while tracing, before compilation) for a
+    joint not declared linear in the beam coordinates
+    (:class:`~ancf_jax.joints.AbstractConstraint`), whose chain–chain Hessian block
+    this matrix would leave out.
     """
+    for c in system.constraints:
+        if not linear_in_beam_coordinates(c):
+            raise ModelError(f"joint {c.name!r} ({type(c).__name__}): the Newton matrix needs joints linear in the "
+                             "beam coordinates (linear_in_beam_coordinates = True on the joint's class and its "
+                             "points'; see ancf_jax.joints.AbstractConstraint)")
     chain = None
     if system.chain_size:
         parts = []

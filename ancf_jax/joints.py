@@ -13,6 +13,7 @@ from __future__ import annotations
 from typing import Callable, ClassVar
 
 import abc
+import dataclasses
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -25,9 +26,23 @@ from .points import AbstractPoint, BeamNode, BodyPoint
 
 
 class AbstractConstraint(eqx.Module):
-    """A joint: ``size`` scalar equations Φ(q, t) = 0 with a name for messages."""
+    """A joint: ``size`` scalar equations Φ(q, t) = 0 with a name for messages.
+
+    Linearity in the beam coordinates. The Newton matrix of implicit integrators and
+    statics (:func:`ancf_jax.dae.iteration_matrix`) holds the constraint Hessian
+    (λ·Φ)_qq only in the rows and columns of the few border coordinates (bodies,
+    sliding coordinates): its block between beam coordinates is zero when Φ is linear
+    in them, as the joints here are (positions S(ξ) e and slopes S'(ξ) e of beam points
+    at fixed ξ). A joint declares this by ``linear_in_beam_coordinates = True`` on its
+    class, and its points by the same flag on theirs
+    (:attr:`ancf_jax.points.AbstractPoint.linear_in_beam_coordinates`); a joint that
+    does not (the default, e.g. a distance |r_a − r_b| − ℓ between beam points) is
+    refused by the Newton matrix with a :class:`~ancf_jax.errors.ModelError` naming
+    it, instead of an inexact matrix (:func:`linear_in_beam_coordinates`).
+    """
 
     name: str = eqx.field(static=True)
+    linear_in_beam_coordinates: ClassVar[bool] = False
 
     @property
     @abc.abstractmethod
@@ -43,6 +58,14 @@ class AbstractConstraint(eqx.Module):
         return tuple(f"{self.name}[{i}]" for i in range(self.size))
 
 
+def linear_in_beam_coordinates(constraint: AbstractConstraint) -> bool:
+    """Whether Φ of ``constraint`` is declared linear in the beam coordinates: its class
+    and the classes of all its points say so (:class:`AbstractConstraint`)."""
+    points = [getattr(constraint, f.name) for f in dataclasses.fields(constraint)]
+    points = [p for p in points if isinstance(p, AbstractPoint)]
+    return constraint.linear_in_beam_coordinates and all(p.linear_in_beam_coordinates for p in points)
+
+
 class Coincident(AbstractConstraint):
     """Two points coincide: r_a(q) − r_b(q) = 0 (2 equations).
 
@@ -53,6 +76,7 @@ class Coincident(AbstractConstraint):
     a: AbstractPoint
     b: AbstractPoint
     size: ClassVar[int] = 2
+    linear_in_beam_coordinates: ClassVar[bool] = True
 
     def residual(self, system, q, t):
         return self.a.position(system, q) - self.b.position(system, q)
@@ -73,6 +97,7 @@ class Clamp(AbstractConstraint):
     location: jnp.ndarray
     slope: jnp.ndarray
     mode: str = eqx.field(static=True, default="full")
+    linear_in_beam_coordinates: ClassVar[bool] = True
 
     @property
     def size(self):  # type: ignore[override]
@@ -102,6 +127,7 @@ class FixedJoint(AbstractConstraint):
     body_point: BodyPoint
     direction_local: jnp.ndarray
     size: ClassVar[int] = 3
+    linear_in_beam_coordinates: ClassVar[bool] = True
 
     def residual(self, system, q, t):
         r = self.point.position(system, q) - self.body_point.position(system, q)
@@ -119,6 +145,7 @@ class PrescribedCoordinate(AbstractConstraint):
     index: int = eqx.field(static=True)
     function: Callable = eqx.field(static=True)
     size: ClassVar[int] = 1
+    linear_in_beam_coordinates: ClassVar[bool] = True
 
     def residual(self, system, q, t):
         return jnp.reshape(q[self.index] - self.function(t), (1,))
@@ -133,6 +160,7 @@ class PathCoordinate(AbstractConstraint):
     index: int = eqx.field(static=True)
     path: AbstractPath
     size: ClassVar[int] = 1
+    linear_in_beam_coordinates: ClassVar[bool] = True
 
     def residual(self, system, q, t):
         return jnp.reshape(q[self.index] - self.path(t), (1,))
@@ -147,6 +175,7 @@ class FixedCoordinate(AbstractConstraint):
     index: int = eqx.field(static=True)
     value: jnp.ndarray
     size: ClassVar[int] = 1
+    linear_in_beam_coordinates: ClassVar[bool] = True
 
     def residual(self, system, q, t):
         return jnp.reshape(q[self.index] - self.value, (1,))
@@ -158,6 +187,7 @@ class PrescribedPoint(AbstractConstraint):
     point: AbstractPoint
     function: Callable = eqx.field(static=True)
     size: ClassVar[int] = 2
+    linear_in_beam_coordinates: ClassVar[bool] = True
 
     def residual(self, system, q, t):
         return self.point.position(system, q) - jnp.reshape(self.function(t), (2,))
@@ -178,6 +208,7 @@ class SlidingJoint(AbstractConstraint):
     sliding: int = eqx.field(static=True)
     body_point: BodyPoint
     size: ClassVar[int] = 2
+    linear_in_beam_coordinates: ClassVar[bool] = True
 
     def residual(self, system, q, t):
         s = system.sliding(q, self.sliding)
@@ -191,6 +222,7 @@ class SlidingHold(AbstractConstraint):
     sliding: int = eqx.field(static=True)
     value: jnp.ndarray
     size: ClassVar[int] = 1
+    linear_in_beam_coordinates: ClassVar[bool] = True
 
     def residual(self, system, q, t):
         return jnp.reshape(system.sliding(q, self.sliding) - self.value, (1,))

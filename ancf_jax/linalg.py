@@ -573,7 +573,14 @@ class AbstractSaddleSolver(eqx.Module):
     factors an operator once, ``compute`` solves with the factors as often as needed.
 
     ``chain_factor``: known factors of the chain block (the constant beam mass), used
-    by solvers that factor the chain separately.
+    by solvers that factor the chain separately. Why an argument, passed down from the
+    integrators' ``prepare`` through :class:`~ancf_jax.newton.ModifiedNewton` (and not a
+    field of the operator or a solver built per run): the factors are computed once per
+    run from the system, outside the compiled step, while the operator is rebuilt at
+    every linearization inside it, and the solver is part of the integrator, which is
+    static configuration (a jit cache key, shared by every run and by vmapped systems
+    of different masses). Moving the factors into a per-run solver would make it data
+    of each run; it is left as an argument (review of issue 16).
     """
 
     @abc.abstractmethod

@@ -9,6 +9,7 @@ length is found inside traced code, so a point can move across nodes.
 from __future__ import annotations
 
 import abc
+from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -17,7 +18,14 @@ from .bodies import body_point, rotation
 
 
 class AbstractPoint(eqx.Module):
-    """A point with a position r(q) [m], shape (2,)."""
+    """A point with a position r(q) [m], shape (2,).
+
+    ``linear_in_beam_coordinates``: position and direction are linear in the beam
+    coordinates (a joint's requirement: :class:`ancf_jax.joints.AbstractConstraint`);
+    False unless a class declares it.
+    """
+
+    linear_in_beam_coordinates: ClassVar[bool] = False
 
     @abc.abstractmethod
     def position(self, system, q):
@@ -38,6 +46,7 @@ class GroundPoint(AbstractPoint):
     """A fixed point of the ground."""
 
     location: jnp.ndarray
+    linear_in_beam_coordinates: ClassVar[bool] = True
 
     def position(self, system, q):
         return self.location
@@ -54,6 +63,7 @@ class BodyPoint(AbstractPoint):
 
     body: int = eqx.field(static=True)
     local: jnp.ndarray
+    linear_in_beam_coordinates: ClassVar[bool] = True
 
     def position(self, system, q):
         return body_point(system.body_pose(q, self.body), self.local)
@@ -70,6 +80,7 @@ class BeamNode(AbstractPoint):
 
     beam: int = eqx.field(static=True)
     node: jnp.ndarray
+    linear_in_beam_coordinates: ClassVar[bool] = True
 
     def position(self, system, q):
         return system.beam_nodes(q, self.beam)[self.node, :2]
@@ -88,6 +99,7 @@ class BeamPoint(AbstractPoint):
 
     beam: int = eqx.field(static=True)
     s: jnp.ndarray
+    linear_in_beam_coordinates: ClassVar[bool] = True
 
     def position(self, system, q):
         return system.beams[self.beam].position(system.beam_nodes(q, self.beam), self.s)
@@ -104,6 +116,7 @@ class SlidingPoint(AbstractPoint):
 
     beam: int = eqx.field(static=True)
     sliding: int = eqx.field(static=True)
+    linear_in_beam_coordinates: ClassVar[bool] = True
 
     def position(self, system, q):
         return system.beams[self.beam].position(system.beam_nodes(q, self.beam),

@@ -74,7 +74,7 @@ def report_m1(results: Results, out_dir: str | Path, *, figures: bool = True,
                               path=out / "fig6_tip_displacement.png")
         plotting.time_history(t, {"exact curvature (Eq. 16)": 1e-6 * cols["sigma_e1_mid"],
                                   "approximate curvature (Eq. 17)": 1e-6 * sig_approx},
-                              ylabel="σ at E1 midpoint, y = +0.5 mm [MPa]",
+                              ylabel=f"σ at s = L/12 = {m1_def.STRESS_S} m, y = +0.5 mm [MPa]",
                               title="M1 dynamic stress (Fig. 7)", path=out / "fig7_stress_e1_mid.png",
                               styles={"approximate curvature (Eq. 17)": dict(ls="--")},
                               difference=("exact curvature (Eq. 16)", "approximate curvature (Eq. 17)"))

@@ -102,6 +102,30 @@ def test_out_in_a_read_only_directory_is_refused(tmp_path, capsys):
         ro.chmod(0o700)
 
 
+def test_out_where_the_access_check_refuses_is_refused(tmp_path, capsys, monkeypatch):
+    """The same refusal where the suite runs as root (CI; the test above skips there):
+    the permission check answers "not writable" for the read-only directory, so
+    _check_out's refusal runs for run, fatigue, fit, synth and sweep (--out and
+    --netcdf), an existing directory and a new path in it alike."""
+    import ancf_jax.cli
+
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    real_access = os.access
+
+    def access(path, mode, **kw):
+        return False if Path(path) == ro else real_access(path, mode, **kw)
+
+    monkeypatch.setattr(ancf_jax.cli.os, "access", access)
+    sweep = ["sweep", "m1", "--param", "beams.beam.section.E=[1e11, 2e11]", "--design", "grid"]
+    for argv in [*out_commands(ro / "new"), [*sweep, "--out", str(ro / "store.zarr")]]:
+        usage_error(argv, capsys, "argument --out", "cannot create", f"{ro} is not writable")
+    usage_error(["run", "m1", "--out", str(ro)], capsys, "argument --out", f"{ro} is not writable")
+    usage_error([*sweep, "--out", str(tmp_path / "store.zarr"), "--netcdf", str(ro / "x.nc")], capsys,
+                "argument --netcdf", f"{ro} is not writable")
+    assert list(ro.iterdir()) == []
+
+
 # ------------------------------------------------------------------ 2. Ctrl-C
 class _InterruptingBar:
     """A progress bar whose second update raises KeyboardInterrupt (as Ctrl-C would

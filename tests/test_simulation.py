@@ -80,6 +80,9 @@ def test_divergence_raises_with_time_and_partial_results():
     e = err.value
     assert e.reason == "nan" and 0.0 < e.time < 0.05
     assert f"t = {e.time:.6g} s" in str(e) and "NaN" in str(e)
+    # the cause named is the rk4 step, not a Newton iteration (issue 25: rk4 failures
+    # were reported as "Newton iteration did not converge")
+    assert "rk4" in str(e) and "Newton" not in str(e), str(e)
     res = e.results
     assert res.status == "nan" and res.failure_time == e.time
     # every step up to the failing one, all finite, starting from the initial state
@@ -91,7 +94,7 @@ def test_divergence_raises_with_time_and_partial_results():
     # on_failure="return" gives the same results instead of raising
     ret = simulate(system, state, t_end=0.05, dt=1e-3, solver="rk4", progress=False,
                    on_failure="return")
-    assert ret.status == "nan" and ret.failure_time == e.time
+    assert ret.status == "nan" and ret.failure_time == e.time and ret.message == str(e)
     np.testing.assert_array_equal(ret.q, res.q)
 
 

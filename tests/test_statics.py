@@ -248,6 +248,13 @@ def test_cantilever_on_a_user_spring_is_euler_bernoulli():
     shape = jax.eval_shape(lambda q: dae.iteration_matrix(system, q, q, lam, state.t, 0.0, 0.0,
                                                           system.constraint_jacobian(q, state.t)), state.q)
     assert shape.n_aux > 0 and isinstance(DEFAULTS.linear_solver.select(shape), BorderedChainSolver)
+    # without beams there is no chain: the same choice is a dense LU (a rigid pendulum)
+    from tests.dynamics import pendulum_model
+    rigid, rigid_state = pendulum_model(0.3).build()
+    lam = jnp.zeros(rigid.n_constraints)
+    shape = jax.eval_shape(lambda q: dae.iteration_matrix(rigid, q, q, lam, 0.0, 0.0, 0.0,
+                                                          rigid.constraint_jacobian(q, 0.0)), rigid_state.q)
+    assert shape.chain_size == 0 and isinstance(DEFAULTS.linear_solver.select(shape), DenseLUSolver)
     sol = solve_static(system, state, load_steps=1, tolerance=1e-12)
     tip = np.asarray(system.beam_nodes(sol.state.q, 0))[-1]
     delta = p / (3 * ei / L**3 + k)

@@ -22,7 +22,12 @@ class Carry(eqx.Module):
         q: coordinates, shape (n,).
         v: velocities, shape (n,).
         acc: accelerations q̈, shape (n,).
-        aux: integrator-specific vector (the generalized-α pseudo-acceleration), shape (n,).
+        aux: integrator-specific vector (the generalized-α pseudo-acceleration; zeros
+            for the explicit methods), shape (n,). Kept apart from ``memory``: it is
+            state of the method, needed to continue a run exactly (saved as
+            ``checkpoint_aux`` in NPZ files), where ``memory`` is a cache of the solver
+            that a run may leave out (None) or rebuild; one (n,) vector is the whole
+            cost for the methods that do not use it.
         lam: Lagrange multipliers λ, shape (m,).
         work: time integrals (dissipated D, external work W_e, constraint work W_c) [J], shape (3,).
         power: their rates at t (:func:`ancf_jax.dae.powers`) [W].
