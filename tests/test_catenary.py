@@ -23,9 +23,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from ancf_jax.errors import ModelError
 from ancf_jax.model import Model
 from ancf_jax.models.catenary import (G, WIRE_FORMULATION, CatenaryDesign, PantographDesign,
-                                      contact_statistics, design_equilibrium, moving_equilibrium, pantograph_catenary,
+                                      contact_statistics, design_equilibrium, lowpass, moving_equilibrium, pantograph_catenary,
                                       pantograph_name, run_pantograph_catenary)
 
 from .beam_theory import moving_load_series
@@ -106,6 +107,13 @@ def test_presag_puts_the_contact_wire_on_its_parabola():
     slope = np.diff(y) / np.diff(x)
     np.testing.assert_allclose(eq.dropper_force - level.dropper_force, c.tension * (slope[:-1] - slope[1:]),
                                rtol=0, atol=1e-4)
+
+
+def test_a_design_without_a_found_equilibrium_is_one_line():
+    """A pre-sag the secant method of the messenger's span does not converge for gives a
+    one-line ModelError naming the span and what to check, not scipy's RuntimeError."""
+    with pytest.raises(ModelError, match="messenger's span 1 has no static equilibrium"):
+        design_equilibrium(CatenaryDesign(presag=0.007, element_length=0.5, **RUN))
 
 
 def static_dropper_errors(element_length, presag=0.0):
@@ -265,6 +273,11 @@ def test_statistics_of_a_known_signal():
     assert stats["stat_max_N"] == pytest.approx(stats["mean_N"] + 3 * stats["std_N"])
     assert stats["contact_loss_pct"] == 0.0
     assert contact_statistics(t, 100 * t, f, window=(0.0, 50.0))["contact_loss_pct"] == pytest.approx(20.0, abs=0.3)
+    # a record too short for the zero-phase filter's padding: one line naming the length,
+    # not scipy's padlen error (the 4-pole filter pads 15 samples; 16 are filtered)
+    with pytest.raises(ModelError, match="more than 15 samples, got 15"):
+        contact_statistics(t[:15], 100 * t[:15], f[:15], window=(0.0, 1.5))
+    assert lowpass(f[:16], 1e-3).shape == (16,)
 
 
 #: the shipped scenario reduced to RUN at 0.5 m elements
@@ -410,7 +423,6 @@ def test_a_trailing_pantograph_that_would_enter_the_line_is_refused():
     the run: otherwise the run is refused before anything is built. (That one far
     behind leaves the leading run unchanged was checked on the small catenary to 1e-9 N
     when this was built; the run needs a program of its own, 41 s of the suite.)"""
-    from ancf_jax.errors import ModelError
     design = CatenaryDesign(element_length=1.0, alpha=0.06, beta=7.6e-5, **RUN)
     with pytest.raises(ModelError, match="pantograph2 starts off the line"):
         run_pantograph_catenary(design, speed_kmh=250, start=0.2, trailing=(20.0,), t_end=0.4)

@@ -447,7 +447,11 @@ def design_equilibrium(design: CatenaryDesign) -> DesignEquilibrium:
             return out, rise
 
         a = -0.5 * (wm * L + loads.sum())  # the symmetric guess: half the span's load
-        b = newton(lambda va0: march(va0)[1], a, x1=1.01 * a, tol=1e-12, rtol=1e-13, maxiter=60)  # secant
+        try:
+            b = newton(lambda va0: march(va0)[1], a, x1=1.01 * a, tol=1e-12, rtol=1e-13, maxiter=60)  # secant
+        except (RuntimeError, ArithmeticError) as err:
+            raise ModelError(f"the messenger's span {k + 1} has no static equilibrium the secant method finds "
+                             f"({err}); check presag, the dropper positions and the messenger tension") from None
         span, _ = march(b)
         segments += span
         support[k] += -span[0][0]                      # upward pull needed at the first pole
@@ -607,7 +611,12 @@ def lowpass(values, dt: float, cutoff: float = CUTOFF, order: int = 4):
         raise ModelError(f"cutoff must be in (0, {0.5 / dt:g}) Hz (below the Nyquist frequency of the "
                          f"samples), got {cutoff!r}")
     sos = signal.butter(order, cutoff, fs=1.0 / dt, output="sos")
-    return signal.sosfiltfilt(sos, np.asarray(values, float))
+    values = np.asarray(values, float)
+    need = 3 * (2 * len(sos) + 1)  # sosfiltfilt's default padding, and one sample more
+    if values.shape[-1] <= need:
+        raise ModelError(f"the low-pass filter needs more than {need} samples, got {values.shape[-1]} "
+                         f"(a run of {values.shape[-1] * dt:g} s at dt = {dt:g} s): run longer or sample finer")
+    return signal.sosfiltfilt(sos, values)
 
 
 def contact_statistics(t, x, force, *, window, cutoff: float = CUTOFF, uplift=None, speed_kmh=None,
