@@ -25,8 +25,8 @@ from ._cache import configure_compilation_cache as _configure_compilation_cache 
 _configure_compilation_cache()
 
 from ._version import __version__  # noqa: E402
-from .errors import (ConstraintError, ModelError, SimulationError, SimulationInterrupted,  # noqa: E402
-                     StaticsError, VelocityProjectionWarning)
+from .errors import (ConstraintError, InexactNewtonMatrixWarning, ModelError, SimulationError,  # noqa: E402
+                     SimulationInterrupted, StaticsError, VelocityProjectionWarning)
 
 __all__ = [
     "__version__",
@@ -36,4 +36,5 @@ __all__ = [
     "SimulationError",
     "SimulationInterrupted",
     "VelocityProjectionWarning",
+    "InexactNewtonMatrixWarning",
 ]

@@ -22,13 +22,15 @@ coordinates and multipliers form the border. Solves cost O(elements).
 
 from __future__ import annotations
 
+import warnings
+
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from .linalg import (AbstractSaddleSolver, AutoSaddleSolver, BlockTridiagonal, SaddleFactor, SaddleMatrix,
                      factor_chain, solve_symmetric_implicit)
-from .errors import ModelError
+from .errors import InexactNewtonMatrixWarning
 from .forces import AbstractForceSet, force_tangent, force_tangent_local, reaction_force_tangent
 from .joints import linear_in_beam_coordinates
 from .newton import ModifiedNewton
@@ -243,17 +245,20 @@ def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac, load_fa
       term (auxiliary unknowns of :class:`SaddleMatrix`), so a spring between any two
       points, or a user-written law, is in the matrix.
 
-    ``load_factor`` scales the applied loads (statics' load stepping). Raises
-    :class:`~ancf_jax.errors.ModelError` (while tracing, before compilation) for a
-    joint not declared linear in the beam coordinates
-    (:class:`~ancf_jax.joints.AbstractConstraint`), whose chain–chain Hessian block
-    this matrix would leave out.
+    ``load_factor`` scales the applied loads (statics' load stepping). Warns
+    (:class:`~ancf_jax.errors.InexactNewtonMatrixWarning`, while tracing, before
+    compilation) for a joint not declared linear in the beam coordinates
+    (:class:`~ancf_jax.joints.AbstractConstraint`), whose chain–chain Hessian block this
+    matrix leaves out: exact for a user's joint between rigid bodies, inexact (slower
+    Newton, never a different solution) for one nonlinear in beam coordinates.
     """
     for c in system.constraints:
         if not linear_in_beam_coordinates(c):
-            raise ModelError(f"joint {c.name!r} ({type(c).__name__}): the Newton matrix needs joints linear in the "
-                             "beam coordinates (linear_in_beam_coordinates = True on the joint's class and its "
-                             "points'; see ancf_jax.joints.AbstractConstraint)")
+            warnings.warn(f"joint {c.name!r} ({type(c).__name__}) is not declared linear in the beam coordinates: "
+                          "the Newton matrix leaves out its Hessian between beam coordinates (exact if it does "
+                          "not depend on them nonlinearly; then set linear_in_beam_coordinates = True on its class "
+                          "and its points'; see ancf_jax.joints.AbstractConstraint)",
+                          InexactNewtonMatrixWarning, stacklevel=2)
     chain = None
     if system.chain_size:
         parts = []

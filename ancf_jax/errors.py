@@ -28,6 +28,17 @@ class VelocityProjectionWarning(UserWarning):
     """
 
 
+class InexactNewtonMatrixWarning(UserWarning):
+    """A joint not declared linear in the beam coordinates is in a Newton matrix.
+
+    Issued by :func:`ancf_jax.dae.iteration_matrix` (while tracing, before compilation)
+    naming the joint: the matrix leaves out its constraint Hessian between beam
+    coordinates, exact only when Φ is linear in them
+    (:class:`ancf_jax.joints.AbstractConstraint`); otherwise Newton converges more slowly
+    or fails (reported as a Newton failure), the solution it reaches is unaffected.
+    """
+
+
 class StaticsError(RuntimeError):
     """The static Newton solver did not converge.
 

@@ -35,10 +35,11 @@ class AbstractConstraint(eqx.Module):
     in them, as the joints here are (positions S(ξ) e and slopes S'(ξ) e of beam points
     at fixed ξ). A joint declares this by ``linear_in_beam_coordinates = True`` on its
     class, and its points by the same flag on theirs
-    (:attr:`ancf_jax.points.AbstractPoint.linear_in_beam_coordinates`); a joint that
-    does not (the default, e.g. a distance |r_a − r_b| − ℓ between beam points) is
-    refused by the Newton matrix with a :class:`~ancf_jax.errors.ModelError` naming
-    it, instead of an inexact matrix (:func:`linear_in_beam_coordinates`).
+    (:attr:`ancf_jax.points.AbstractPoint.linear_in_beam_coordinates`); for a joint that
+    does not (the default of a user's joint class: a joint between rigid bodies, for
+    which the matrix is exact, or a distance |r_a − r_b| − ℓ between beam points, for
+    which it is not) the Newton matrix warns, naming it
+    (:class:`~ancf_jax.errors.InexactNewtonMatrixWarning`; :func:`linear_in_beam_coordinates`).
     """
 
     name: str = eqx.field(static=True)
