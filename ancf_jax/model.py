@@ -121,6 +121,11 @@ ALONG = ("x", "arc_length")
 #: (:meth:`Model.contact`): the contact spring in series adds 1/100 to the beam's
 #: compliance there (its penetration is 1 % of the beam's deflection under the same force)
 CONTACT_STIFFNESS_FACTOR = 100.0
+#: most active coordinates for which :meth:`Model.build` derives a contact's default
+#: stiffness (:func:`~ancf_jax.modal.contact_point_stiffness` factors the dense reduced
+#: stiffness, O(n³) time and n² memory: 2,000 coordinates take seconds, the 10-span
+#: catenary's 9,600 would take minutes and GBs); above it a stiffness must be given
+CONTACT_STIFFNESS_MAX_COORDINATES = 2000
 
 
 def _as_path(what: str, path) -> AbstractPath:
@@ -705,8 +710,9 @@ class Model:
                 (:func:`~ancf_jax.modal.contact_point_stiffness`), set by
                 :meth:`build`: the contact then adds 1 % to the beam's compliance
                 there (docs/moving-loads.md, "Contact stiffness"). A beam held rigidly
-                there (every node clamped) or not held at all has no such default:
-                :meth:`build` raises.
+                there (every node clamped) or not held at all has no such default,
+                nor has a model of more than :data:`CONTACT_STIFFNESS_MAX_COORDINATES`
+                coordinates (the derivation is a dense solve): :meth:`build` raises.
             damping: c [N·s/m] >= 0.
             side: +1 if the point is on the side of the beam's left normal (above a
                 beam running in +x), −1 if on the other side (below it: a pantograph
@@ -739,6 +745,12 @@ class Model:
         for kind, name, a in self._forces:
             if kind != "contact" or a["stiffness"] is not None:
                 continue
+            n = int(np.sum(~np.asarray(system.inactive_mask())))
+            if n > CONTACT_STIFFNESS_MAX_COORDINATES:
+                raise ModelError(
+                    f"stiffness of contact {name!r} has no default in a model of {n} coordinates (the default's "
+                    f"dense solve is limited to {CONTACT_STIFFNESS_MAX_COORDINATES}): give stiffness [N/m] > 0 "
+                    f"(docs/moving-loads.md, \"Contact stiffness\")")
             i = next(i for i, f in enumerate(system.forces) if f.name == name)
             kb = contact_point_stiffness(system, q, system.forces[i])
             if not 0.0 < kb < np.inf:

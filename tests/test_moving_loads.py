@@ -395,6 +395,14 @@ def test_default_contact_stiffness_from_the_beam():
                        r"there is inf N/m: the model holds it rigidly\); give stiffness \[N/m\] > 0") as err:
         cantilever([0, 1, 2]).build()
     assert "\n" not in str(err.value)
+    # the derivation is a dense solve: above CONTACT_STIFFNESS_MAX_COORDINATES it is refused
+    # (lowered here below the 15 coordinates of the cantilever and ball), before anything is solved
+    import ancf_jax.model as model_module
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(model_module, "CONTACT_STIFFNESS_MAX_COORDINATES", 11)
+        with pytest.raises(ModelError, match=r"^stiffness of contact 'touch' has no default in a model of 15 "
+                           r"coordinates \(the default's dense solve is limited to 11\): give stiffness"):
+            cantilever([0]).build(assemble=False)
 
 
 # ---------------------------------------------------------------------------- gradients
