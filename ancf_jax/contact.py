@@ -66,10 +66,10 @@ import jax
 import jax.numpy as jnp
 import optimistix as optx
 
-from .forces import AbstractKinkedForce, AbstractLoad, AbstractNodeCrossing
+from .forces import AbstractKinkedForce, AbstractLoad, AbstractNodeCrossing, point_load
 from .functions import AbstractPath
 from .element.shape_functions import shape_functions, shape_functions_dx
-from .points import AbstractPoint, element_coordinates
+from .points import AbstractPoint, BeamPoint, element_coordinates
 from .sliding import regularized_coulomb, reversal_kink
 
 #: most Newton steps of the searches on the deformed beam (from the linear interpolation
@@ -169,14 +169,6 @@ def _left_normal(e, u, length):
     return jnp.stack([-r1[1], r1[0]]) / jnp.linalg.norm(r1)
 
 
-def material_point_load(system, beam: int, q, s, force):
-    """Generalized force S(s)ᵀF of a force F [N] (2,) on the material point of beam
-    ``beam`` at reference arc length s [m] (held fixed), shape (n,)."""
-    b = system.beams[beam]
-    _, vjp = jax.vjp(lambda qq: b.position(system.beam_nodes(qq, beam), s), q)
-    return vjp(force)[0]
-
-
 def node_crossing_value(mesh, s):
     """(−1)ᵏ f (1 − f) with ξ = k + f the global element coordinate of the reference arc
     length s [m] (k the element holding s, f = (s − s_k)/l_k ∈ [0, 1); beyond the ends
@@ -260,7 +252,7 @@ class MovingForce(AbstractLoad, AbstractNodeCrossing):
     def applied_force(self, system, q, v, t):
         s, on = self.location.locate(system, self.beam, q, t)
         f = self.force if self.time_function is None else self.force * self.time_function(t)
-        return material_point_load(system, self.beam, q, s, jnp.where(on, f, 0.0))
+        return point_load(system, BeamPoint(self.beam, s), q, jnp.where(on, f, 0.0))
 
     def coordinates(self, system, q, t):
         s, _ = self.location.locate(system, self.beam, q, t)
@@ -339,7 +331,7 @@ class UnilateralContact(AbstractKinkedForce, AbstractNodeCrossing):
         closest point s* (the force the contact's point would exert on the beam pushed
         into it), shape (n,): the load of :func:`ancf_jax.modal.contact_point_stiffness`."""
         s, _, e, u, length, _ = _closest(system, self.beam, q, self.point.position(system, q))
-        return -material_point_load(system, self.beam, q, s, self.side * _left_normal(e, u, length))
+        return -point_load(system, BeamPoint(self.beam, s), q, self.side * _left_normal(e, u, length))
 
     def gap(self, system, q):
         """g = σ n̂·(p − r(s*)) − g₀ [m] (negative: penetration), whether or not s* is

@@ -287,15 +287,3 @@ def test_report_pantograph_section_from_its_json(tmp_path):
     assert "shipped 10-span model, 300 steps" in text
     assert "the shipped scenario's step and solver: h = 2 ms" in text
 
-
-def test_recorded_speed_batches_equal_their_single_runs():
-    """The vmapped batches of speeds that pantograph_catenary.json records (the reduced
-    catenary's, and the shipped model's once run) equal their single runs: the largest
-    difference of q within 1e-9 m (recorded 6e-14 m). The run itself is the benchmark's
-    (``batch``): in the suite it would compile a vmapped catenary program, ~50 CPU s
-    (measured), beyond the suite's budget."""
-    from pathlib import Path
-    data = json.loads((Path(report.DEFAULT_RESULTS) / "pantograph_catenary.json").read_text())
-    recorded = [data[p] for p in ("batch", "batch_full") if p in data]
-    assert recorded and all(len(b["speeds_kmh"]) == 8 for b in recorded)
-    assert all(0.0 <= b["max_q_difference_m"] < 1e-9 for b in recorded), recorded

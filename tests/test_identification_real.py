@@ -331,7 +331,7 @@ def test_joint_fit_of_two_experiments(plain):
 
 
 # ---------------------------------------------------------------------------- CLI
-#: bootstrap members: the 0.1 % and 99.9 % points of χ²(B − 1) bound the ratio of a
+#: bootstrap members: the 0.05 % and 99.95 % points of χ²(B − 1) bound the ratio of a
 #: B-member standard deviation to the true spread (0.26 to 1.93 for B = 8)
 BOOTSTRAP = 8
 
