@@ -1,6 +1,8 @@
 """Identification on records that the fitted model did not make (issue 18): nuisance
 parameters of the measurement, misfit diagnostics, discretization control, bootstrap
-and profile likelihood, scenario keys as parameters, several sensors.
+and profile likelihood (also from ``ancf-jax fit --profile``), scenario keys as
+parameters, several sensors, and several experiments fitted jointly (``fit_joint`` with
+a noise level per record, and ``ancf-jax fit --joint``).
 
 The model is the one of ``tests/test_identification.py`` — M1 with 3 elements,
 generalized-α at h = 2 ms, samples at 500 Hz — so the cost stays a few compilations:
