@@ -168,13 +168,14 @@ def fit_joint(problems: Sequence[Problem], records: Sequence[Measurements], init
     """One parameter set fitted to several experiments' records (module docstring).
 
     Args:
-        problems, records: one problem and one record per experiment or sensor.
+        problems: one problem per experiment or sensor (the same parameters).
+        records: the record of each problem, in the same order.
         init: initial values {name: value} (one start).
         noise: None, one σ for all records, or one σ per record (the standard deviation
             of a sample of weight 1, each record's output unit): weights w/σ_e² and the
             per-record χ² test of the residual RMS against σ_e.
         window: (t_start, t_end) [s] applied to every record.
-        options: as :func:`~.fit.fit_batch` (no discretization check).
+        **options: as :func:`~.fit.fit_batch` (no discretization check).
 
     Returns a :class:`~.report.FitResult` over all samples (``data`` the concatenated
     records; ``t_grid``/``y_fit`` the first experiment's curve; ``records`` the
