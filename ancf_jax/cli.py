@@ -265,7 +265,17 @@ def build_parser() -> argparse.ArgumentParser:
     common(fit, "element count of the (single) beam")
     fit.add_argument("--data", type=Path, action="append", required=True, metavar="CSV",
                      help="measured samples with columns t,y (optional w: weights); repeat for a "
-                          "batch of data sets fitted under one vmap")
+                          "batch of data sets fitted under one vmap, or with --joint for one fit of all")
+    fit.add_argument("--joint", action="store_true",
+                     help="fit one parameter set to all --data records together (experiments with other "
+                          "loads or initial conditions: follow a --data by --record-set and --record-noise "
+                          "for that record); fit.json reports the joint estimate and each record's residuals")
+    fit.add_argument("--record-set", action=_RecordOption, type=str, metavar="KEY=VALUE",
+                     help="with --joint: override a scenario key for the record of the preceding --data "
+                          "only (on top of --set); repeatable")
+    fit.add_argument("--record-noise", action=_RecordOption, type=_positive_float, metavar="SIGMA",
+                     help="with --joint: the noise level of the preceding --data record (output units; "
+                          "default --noise): weights 1/SIGMA^2 and that record's RMS-against-noise test")
     fit.add_argument("--params", default="alpha,beta",
                      help="parameters to fit, comma-separated: alpha, beta, E, tip_mass, speed.NAME, or any real "
                           "scalar of the scenario by its dotted key (beams.beam.section.I, gravity[1]) "
@@ -304,6 +314,9 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--bootstrap", type=_nonnegative_int, default=0, metavar="N",
                      help="parametric bootstrap with N synthetic records fitted as one vmapped batch "
                           "(default 0: off)")
+    fit.add_argument("--profile", action="append", default=[], metavar="NAME",
+                     help="profile-likelihood interval of a fitted parameter (delta = 4 on each side, the "
+                          "others refitted; compared with Gauss-Newton's +-2 SE); repeatable")
     fit.add_argument("--out", type=Path, default=None, help="output directory (default results/MODEL-fit)")
     fit.add_argument("--no-figures", action="store_true", help="skip the figure")
     fit.add_argument("--no-progress", action="store_true", help="no per-iteration lines")
@@ -313,6 +326,27 @@ def build_parser() -> argparse.ArgumentParser:
 # ---------------------------------------------------------------------------- helpers
 class _UsageError(Exception):
     """A one-line command-line error (exit status 2)."""
+
+
+class _RecordOption(argparse.Action):
+    """``fit --record-set`` / ``--record-noise``: an option of the record named by the
+    preceding ``--data`` (stored in ``namespace.records``: {index: {"set": [...],
+    "noise": σ}})."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        data = getattr(namespace, "data", None) or []
+        if not data:
+            parser.error(f"argument {option_string}: must follow the --data CSV of the record it applies to")
+        records = getattr(namespace, "records", None) or {}
+        rec = records.setdefault(len(data) - 1, {"set": [], "noise": None, "options": []})
+        if option_string == "--record-noise":
+            if rec["noise"] is not None:
+                parser.error(f"argument --record-noise: given twice for the record {data[-1]}")
+            rec["noise"] = values
+        else:
+            rec["set"].append(values)
+        rec["options"].append(option_string)
+        namespace.records = records
 
 
 def _check_out(path, option: str = "--out", *, file: bool = False) -> Path:
@@ -993,9 +1027,57 @@ def _parse_init(text: str) -> dict:
     return out
 
 
+def _joint_problems(args, names, records) -> list:
+    """One identification problem per ``--data`` record of ``fit --joint``: the model
+    with ``--set`` and the record's own ``--record-set`` overrides (one-line errors
+    naming the record, nothing compiled)."""
+    problems = []
+    for k, path in enumerate(args.data):
+        sets = records.get(k, {}).get("set", [])
+        try:
+            pr = _identification_problem(argparse.Namespace(**{**vars(args), "overrides": args.overrides + sets}),
+                                         names)
+        except _UsageError as e:
+            if not sets:
+                raise
+            raise _UsageError(f"argument --record-set (record {k + 1}, {path}): {e}") from None
+        if sets:
+            pr.name = f"{pr.name} [{', '.join(sets)}]"
+        problems.append(pr)
+    return problems
+
+
+def _check_joint(args, inits, records) -> list | None:
+    """Refuse what ``fit --joint`` cannot do (before anything is built); returns the
+    records' noise levels (``--record-noise``, else ``--noise``; None if none is stated)."""
+    if records and not args.joint:
+        option = next(iter(records.values()))["options"][0]
+        raise _UsageError(f"argument {option}: only with --joint (it sets one record of a joint fit)")
+    if args.profile and ((len(args.data) > 1 and not args.joint) or len(inits) > 1):
+        raise _UsageError("argument --profile: needs one --data (or --joint) and at most one --init")
+    if not args.joint:
+        return None
+    if len(args.data) < 2:
+        raise _UsageError(f"argument --joint: needs at least two --data records, got {len(args.data)}")
+    if len(inits) > 1:
+        raise _UsageError(f"argument --joint: give at most one --init (a joint fit has one start), got {len(inits)}")
+    if args.bootstrap:
+        raise _UsageError("argument --bootstrap: not with --joint (the bootstrap resamples one record)")
+    if args.nuisance.strip():
+        raise _UsageError("argument --nuisance: not with --joint (a joint fit has no nuisance parameters)")
+    noise = [records.get(k, {}).get("noise") or args.noise for k in range(len(args.data))]
+    if all(n is None for n in noise):
+        return None
+    if any(n is None for n in noise):
+        k = noise.index(None)
+        raise _UsageError(f"argument --record-noise: record {k + 1} ({args.data[k]}) has no noise level; give "
+                          "--record-noise after every --data, or --noise for the records without one")
+    return noise
+
+
 def _fit(args) -> int:
     from .errors import ModelError, SimulationError
-    from .identification import bootstrap, fit, fit_batch, read_csv
+    from .identification import JointProblem, bootstrap, fit, fit_batch, profile_interval, read_csv
     from .identification.data import DataError
     if args.out is not None:
         _check_out(args.out)
@@ -1003,6 +1085,8 @@ def _fit(args) -> int:
     if not requested:
         raise _UsageError("argument --params: give at least one parameter")
     inits = [_parse_init(t) for t in args.init]
+    records = getattr(args, "records", None) or {}
+    noises = _check_joint(args, inits, records)
     datasets = []
     for path in args.data:
         try:
@@ -1019,20 +1103,36 @@ def _fit(args) -> int:
         if unknown:
             raise _UsageError(f"argument --init: unknown parameter(s) {', '.join(sorted(unknown))} "
                               f"(parameters: {', '.join(problem.names)})")
+    for name in args.profile:
+        if name not in free:
+            raise _UsageError(f"argument --profile: {name!r} is not a fitted parameter (fitted: {', '.join(free)})")
+    joint = None
+    if args.joint:
+        try:
+            joint = JointProblem(_joint_problems(args, names, records), datasets, noises, window=args.window)
+        except (DataError, ModelError) as e:
+            raise _UsageError(str(e)) from None
     out = _check_out(Path(args.out) if args.out is not None else Path("results") / f"{problem.name}-fit")
-    options = dict(free=free, window=args.window, method=args.method, max_iterations=args.max_iter,
-                   progress=not args.no_progress, noise=args.noise)
+    options = dict(free=free, method=args.method, max_iterations=args.max_iter, progress=not args.no_progress)
     try:
-        if len(datasets) == 1 and len(inits) <= 1:
+        if joint is not None:
+            results = [joint.fit(inits[0] if inits else None, **options)]
+            if not args.no_refine:
+                results[0].discretization = dict(
+                    checked=False, notes=[], summary="not checked: a joint fit has no discretization check "
+                    "(check the model with a fit of one record, or pass --no-refine)")
+        elif len(datasets) == 1 and len(inits) <= 1:
             # one record: the discretization check (and refinement) unless --no-refine
             results = [fit(problem, datasets[0], inits[0] if inits else None, discretization=not args.no_refine,
-                           refine_budget=args.refine_budget, **options)]
+                           refine_budget=args.refine_budget, window=args.window, noise=args.noise, **options)]
             if args.bootstrap:
                 bootstrap(problem, results[0], args.bootstrap)
         else:
             if args.bootstrap:
                 raise _UsageError("argument --bootstrap: needs one --data and at most one --init")
-            results = fit_batch(problem, datasets, inits or None, **options)
+            results = fit_batch(problem, datasets, inits or None, window=args.window, noise=args.noise, **options)
+        if args.profile:
+            results[0].profiles = {n: profile_interval(joint or problem, results[0], n) for n in args.profile}
     except (DataError, ModelError) as e:
         raise _UsageError(str(e)) from None
     except SimulationError as e:

@@ -30,7 +30,7 @@ DIMENSIONLESS = frozenset({
     "iterations", "evaluations", "n_samples", "n", "ljung_box_q", "ljung_box_p", "ljung_box_lags",
     "lag1_autocorrelation", "rms_over_noise", "chi2_p_high", "chi2_p_low", "matrix", "members", "seed",
     "converged", "limit_se", "budget", "remaining_shift_se", "max_shift_se", "step_divided_by",
-    "elements_multiplied_by", "final_elements",
+    "elements_multiplied_by", "final_elements", "record",
 })
 
 

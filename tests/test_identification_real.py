@@ -1,6 +1,8 @@
 """Identification on records that the fitted model did not make (issue 18): nuisance
 parameters of the measurement, misfit diagnostics, discretization control, bootstrap
-and profile likelihood, scenario keys as parameters, several sensors.
+and profile likelihood (also from ``ancf-jax fit --profile``), scenario keys as
+parameters, several sensors, and several experiments fitted jointly (``fit_joint`` with
+a noise level per record, and ``ancf-jax fit --joint``).
 
 The model is the one of ``tests/test_identification.py`` — M1 with 3 elements,
 generalized-α at h = 2 ms, samples at 500 Hz — so the cost stays a few compilations:
@@ -196,7 +198,8 @@ def test_profile_interval_solves_an_asymmetric_profile(monkeypatch, se, lower_z,
         return dict(points=[dict(value=1.0 + z * se, delta=root ** 2)])
 
     monkeypatch.setattr(uncertainty, "profile", fake_profile)
-    result = SimpleNamespace(free=("k",), names=("k",), estimates=np.array([1.0]), stderr=np.array([se]))
+    result = SimpleNamespace(free=("k",), names=("k",), estimates=np.array([1.0]), stderr=np.array([se]), dt=None,
+                             elements=None)
     iv = profile_interval(SimpleNamespace(log_scaled=np.array([True])), result, "k")
     # the solver's contract: |sqrt(Δ) − 2| <= tol = 0.01 at each end, i.e. z within
     # 0.01 / (d sqrt(Δ)/dz): 0.005 above, 0.015 below
@@ -307,27 +310,89 @@ def test_discretization_refines_the_mesh_within_its_budget(plain, tmp_path, caps
 
 
 # ---------------------------------------------------------------------------- joint
-def test_joint_fit_of_two_experiments(plain):
-    """Two experiments — M1 released under gravity 9.81 and 5 m/s² (another load; same
-    shapes: one compiled program) — fitted with one α. Reference: Gauss–Newton information adds
-    over independent records, so the joint standard error is 1/sqrt(Σ 1/SE_e²) with
-    SE_e each record's own standard error at the same α."""
-    heavy = Problem.from_scenario("m1", ("alpha", "beta"), elements=ELEMENTS, t_end=T_END, dt=DT,
-                                  overrides=["gravity=[0.0, -5.0]"])
-    sigma = 1e-4
-    records = [synthesize(pr, {"alpha": ALPHA, "beta": 0.0}, noise=sigma, rate=RATE, seed=20 + k,
-                          program="jacobian")[0] for k, pr in enumerate((plain, heavy))]
-    res = fit_joint([plain, heavy], records, {"alpha": 0.01, "beta": 0.0}, free=("alpha",), noise=sigma)
+#: the joint fit's experiments: M1 under gravity 9.81 and 5 m/s² (another load; same
+#: shapes: one compiled program), with noise of 0.1 mm and 0.3 mm
+HEAVY = "gravity=[0.0, -5.0]"
+JOINT_NOISE = (1e-4, 3e-4)
+
+
+@pytest.fixture(scope="module")
+def joint(plain):
+    """(problems, records, fit_joint result with the noise level of each record)."""
+    heavy = Problem.from_scenario("m1", ("alpha", "beta"), elements=ELEMENTS, t_end=T_END, dt=DT, overrides=[HEAVY])
+    problems = (plain, heavy)
+    records = [synthesize(pr, {"alpha": ALPHA, "beta": 0.0}, noise=s, rate=RATE, seed=20 + k,
+                          program="jacobian")[0] for k, (pr, s) in enumerate(zip(problems, JOINT_NOISE))]
+    res = fit_joint(problems, records, {"alpha": 0.01, "beta": 0.0}, free=("alpha",), noise=JOINT_NOISE)
+    return problems, records, res
+
+
+def test_joint_fit_of_two_experiments(joint):
+    """Two experiments (another load, another noise level) fitted with one α, each
+    record weighted by its own 1/σ². Reference: Gauss–Newton information adds over
+    independent records, so the joint standard error is 1/sqrt(Σ 1/SE_e²) with SE_e
+    each record's own standard error at the same α (from its own residuals, by
+    ``Problem.evaluate``); with equal weights instead the 0.3 mm record would count as
+    much as the 0.1 mm one. The per-record diagnostics: each record's residual RMS
+    (against its own re-evaluation) and its RMS over its own noise level, ≈ 1 for both
+    although the levels differ 3 × (one σ for both would put one at 3 or 1/3)."""
+    problems, records, res = joint
     assert res.converged and res.n_samples == 2 * len(records[0])
     assert abs(res.estimates[0] - ALPHA) <= 3 * res.stderr[0]
     se = []
-    for pr, d in zip((plain, heavy), records):
+    for pr, d, rec, sigma in zip(problems, records, res.records, JOINT_NOISE):
         r, jac, *_ = pr.evaluate(res.estimates, [d])
         se.append(gauss_newton_statistics(r[0], jac[0][:, :1], len(d))[0][0])
+        assert rec["residual_rms"] == pytest.approx(np.sqrt(r[0] @ r[0]), rel=1e-9)
+        dg = rec["diagnostics"]
+        assert dg["white"] and dg["n"] == len(d) and dg["noise"] == sigma and abs(dg["rms_over_noise"] - 1) < 0.1
+        assert np.sqrt(np.mean((rec["_model"] - d.y) ** 2)) == pytest.approx(rec["residual_rms"], rel=1e-9)
     assert res.stderr[0] == pytest.approx(1 / np.sqrt(sum(1 / s ** 2 for s in se)), rel=0.05), se
     assert res.diagnostics["white"] and abs(res.diagnostics["rms_over_noise"] - 1) < 0.1
     with pytest.raises(ModelError, match="at least two experiments"):
-        fit_joint([plain], records[:1])
+        fit_joint(problems[:1], records[:1])
+    with pytest.raises(ModelError, match=r"noise\[1\] must be a finite number > 0"):
+        fit_joint(problems, records, noise=[1e-4, 0.0])
+
+
+def test_cli_joint_fit(joint, tmp_path, capsys):
+    """``ancf-jax fit --joint``: the two records of :func:`joint` as CSV files, the
+    second followed by its own load (``--record-set``) and each by its noise level
+    (``--record-noise``). The CLI builds the same two problems (the API's program, no
+    new compilation) and reports the API's joint estimate and standard error; the truth
+    lies within 3 of them (without the second record's load the fit would put α far
+    off: gravity moves the tip by centimetres). fit.json and the summary hold each
+    record's residual RMS and diagnostics, and, as the check is on by default, say that
+    a joint fit has no discretization check."""
+    from ancf_jax.cli import main
+    from ancf_jax.identification import write_csv
+    problems, records, api = joint
+    paths = []
+    for k, d in enumerate(records):
+        paths.append(tmp_path / f"record{k + 1}.csv")
+        write_csv(paths[-1], d.t, d.y, precision=17)
+    out = tmp_path / "joint"
+    assert main(["fit", "m1", "--elements", str(ELEMENTS), "--t-end", str(T_END), "--dt", str(DT), "--joint",
+                 "--data", str(paths[0]), "--record-noise", str(JOINT_NOISE[0]),
+                 "--data", str(paths[1]), "--record-set", HEAVY, "--record-noise", str(JOINT_NOISE[1]),
+                 "--params", "alpha", "--init", "alpha=0.01,beta=0", "--no-figures", "--no-progress",
+                 "--out", str(out)]) == 0
+    report = assert_unit_keys(out / "fit.json")
+    assert report["raw_estimates"]["alpha"] == pytest.approx(api.estimates[0], rel=1e-6)
+    assert report["alpha_stderr"] == pytest.approx(api.stderr[0], rel=1e-6)
+    assert abs(report["alpha"] - ALPHA) <= 3 * report["alpha_stderr"] and report["alpha_status"] == DETERMINED
+    assert report["n_samples"] == sum(len(d) for d in records) and report["free"] == ["alpha"]
+    assert [r["record"] for r in report["records"]] == [1, 2]
+    for rec, want, path, sigma in zip(report["records"], api.records, paths, JOINT_NOISE):
+        assert rec["source"] == str(path) and rec["noise"] == sigma and rec["n_samples"] == want["n_samples"]
+        assert rec["residual_rms"] == pytest.approx(want["residual_rms"], rel=1e-6)
+        assert rec["diagnostics"]["rms_over_noise"] == pytest.approx(want["diagnostics"]["rms_over_noise"], rel=1e-6)
+        assert rec["diagnostics"]["white"] and "notes" not in rec["diagnostics"]
+    assert HEAVY in report["records"][1]["model"] and HEAVY not in report["records"][0]["model"]
+    assert report["discretization"]["checked"] is False
+    summary = capsys.readouterr().out
+    assert f"record 2 ({paths[1]}, m1 [{HEAVY}]): {len(records[1])} samples" in summary
+    assert "discretization: not checked: a joint fit" in summary
 
 
 # ---------------------------------------------------------------------------- CLI
@@ -341,8 +406,10 @@ def test_cli_bootstrap_and_profile_interval_near_a_bound(problem, curve, tmp_pat
     """Where Gauss–Newton is unreliable. The shifted, offset and scaled record of the
     fixtures with 1 mm of noise (20 × SIGMA), so that α (true 0.02 1/s) is barely
     determined next to its bound 0 with τ, c and g fitted too, written as CSV and fitted
-    by ``ancf-jax fit --nuisance ... --noise ... --bootstrap 8`` (the fit is the API's
-    and compiles nothing new; the bootstrap's eight members are one vmapped program).
+    by ``ancf-jax fit --nuisance ... --noise ... --bootstrap 8 --profile alpha --profile
+    offset`` (the fit is the API's and compiles nothing new; the bootstrap's eight
+    members are one vmapped program; the profile intervals are ``profile_interval``'s,
+    in fit.json's ``profile`` and the summary).
 
     Bootstrap: eight records drawn from the fitted model with the stated noise, refitted
     without linearising; reference: the fit's Gauss–Newton SE. For each free parameter
@@ -356,7 +423,7 @@ def test_cli_bootstrap_and_profile_interval_near_a_bound(problem, curve, tmp_pat
     bootstrap member falls below 0. Negative control: the profile interval of the offset
     c (linear in the record, far from any bound) equals c ± 2 SE to 1 %."""
     from ancf_jax.cli import main
-    from ancf_jax.identification import profile_interval, write_csv
+    from ancf_jax.identification import write_csv
     t, grid, y = curve
     sigma = 20 * SIGMA
     clean = GAIN * np.interp(t + TAU, grid, y) + OFFSET
@@ -368,7 +435,8 @@ def test_cli_bootstrap_and_profile_interval_near_a_bound(problem, curve, tmp_pat
     assert main(["fit", "m1", "--elements", str(ELEMENTS), "--t-end", str(T_END), "--dt", str(DT),
                  "--data", str(path), "--params", "alpha", "--init", "alpha=0.01,beta=0",
                  "--nuisance", "time_offset,offset,gain", "--noise", str(sigma), "--no-refine",
-                 "--bootstrap", str(BOOTSTRAP), "--no-figures", "--no-progress", "--out", str(out)]) == 0
+                 "--bootstrap", str(BOOTSTRAP), "--profile", "alpha", "--profile", "offset", "--no-figures",
+                 "--no-progress", "--out", str(out)]) == 0
     report = assert_unit_keys(out / "fit.json")
     assert report["nuisance"] == list(NUISANCE) and report["discretization"] is None
     assert report["units"]["time_offset"] == "s"
@@ -376,6 +444,7 @@ def test_cli_bootstrap_and_profile_interval_near_a_bound(problem, curve, tmp_pat
     assert report["diagnostics"]["white"]
     summary = capsys.readouterr().out
     assert "(nuisance)" in summary and f"bootstrap ({BOOTSTRAP} members)" in summary
+    assert "profile likelihood alpha (Δ = 4): [0 (its bound), " in summary
 
     res = fit(problem, rec, {"alpha": 0.01, "beta": 0.0}, free=("alpha",) + NUISANCE, noise=sigma)
     bs = report["bootstrap"]
@@ -395,12 +464,13 @@ def test_cli_bootstrap_and_profile_interval_near_a_bound(problem, curve, tmp_pat
     alpha, se = res.estimates[0], res.stderr[0]
     assert 0 < alpha < 2 * se, (alpha, se)  # Gauss–Newton's 2 SE interval holds negative α
     assert report["alpha"] is None and report["alpha_status"] == ZERO  # the report says so
-    iv = profile_interval(problem, res, "alpha")
+    iv = report["profile"]["alpha"]  # profile_interval(problem, res, "alpha") by --profile alpha
+    assert iv["estimate"] == pytest.approx(alpha, rel=1e-6) and iv["gn_stderr"] == pytest.approx(se, rel=1e-6)
     assert iv["gn_lower"] < 0 and iv["lower_at_bound"] and iv["lower"] == 0.0, iv
     assert min(e["delta"] for e in iv["evaluations"] if e["value"] < alpha) < 4
     assert abs(iv["upper"] - iv["gn_upper"]) <= 0.1 * 2 * se, iv
     assert min(bs["estimates"]["alpha"]) >= 0
-    offset = profile_interval(problem, res, "offset")
+    offset = report["profile"]["offset"]
     k = res.names.index("offset")
     assert not offset["lower_at_bound"]
     assert offset["lower"] == pytest.approx(res.estimates[k] - 2 * res.stderr[k], abs=0.01 * 2 * res.stderr[k])

@@ -13,17 +13,31 @@ as for one record), and its Jacobian stacks theirs. Everything downstream — th
 Levenberg–Marquardt loop, the Gauss–Newton statistics, the misfit diagnostics — sees one
 record of Σ N_e samples. Experiments whose systems differ only in values (a mass, a
 load, an initial state of the same shapes) share one compiled program.
+
+A noise level per record. With ``noise=[σ_1, ..., σ_E]`` (σ_e the standard deviation of
+a sample of weight 1 in record e, in its output unit) each record's weights become
+w_e,i / σ_e², so a record is weighted by its inverse noise variance (records of
+different sensors or noise levels: without it the record with the larger numbers
+dominates). The misfit diagnostics (:func:`~.report.misfit_diagnostics`: Ljung–Box
+whiteness, RMS against σ_e with the χ² test) then run per record on its own residuals
+r_e (``FitResult.records``), as well as over the stacked residuals, where the stated
+noise is the one of the weights w/σ², sqrt(N / Σ w_e,i/σ_e²), so that the χ² statistic
+is Σ_e Σ_i w_e,i e_e,i² / σ_e². The per-record χ² tests count every free parameter
+against each record's samples (conservative: the parameters are shared).
 """
 
 from __future__ import annotations
 
-from typing import Sequence
+import math
+from typing import Optional, Sequence
 
 import numpy as np
 
 from ..errors import ModelError
+from ..validation import check_positive
 from .data import Measurements
 from .problem import Problem
+from .report import misfit_diagnostics
 
 
 class JointData(Measurements):
@@ -32,9 +46,14 @@ class JointData(Measurements):
 
 class JointProblem:
     """Experiments (problems with the same parameter names, without nuisance
-    parameters) and their records, fitted with one parameter set (:func:`fit_joint`)."""
+    parameters) and their records, fitted with one parameter set (:func:`fit_joint`).
 
-    def __init__(self, problems: Sequence[Problem], records: Sequence[Measurements]):
+    ``noise``: None, one σ for every record, or one σ per record (output units; module
+    docstring); the records' weights are then divided by σ_e². ``window``: (t_start,
+    t_end) [s] applied to every record."""
+
+    def __init__(self, problems: Sequence[Problem], records: Sequence[Measurements],
+                 noise: Optional[float | Sequence[float]] = None, window: Optional[tuple] = None):
         if len(problems) < 2 or len(problems) != len(records):
             raise ModelError(f"a joint fit needs at least two experiments with one record each, got "
                              f"{len(problems)} problems and {len(records)} records")
@@ -46,7 +65,12 @@ class JointProblem:
             if p.nuisance:
                 raise ModelError("joint fit: nuisance parameters are not supported across experiments")
         self.problems = list(problems)
-        self.records = [p.prepare(d) for p, d in zip(problems, records)]
+        #: the noise level of each record (None: not stated)
+        self.noise = record_noise(noise, len(records))
+        self.records = [p.prepare(d, window) for p, d in zip(problems, records)]
+        if self.noise is not None:
+            self.records = [Measurements(d.t, d.y, d.w / s ** 2, d.lines, d.source)
+                            for d, s in zip(self.records, self.noise)]
         self.sizes = [len(d) for d in self.records]
         first = self.problems[0]
         self.system, self.params, self.output, self.nuisance = first.system, first.params, first.output, ()
@@ -89,12 +113,71 @@ class JointProblem:
                 first[1], 0.0)
 
 
-def fit_joint(problems: Sequence[Problem], records: Sequence[Measurements], init=None, **options):
+    @property
+    def stacked_noise(self) -> Optional[float]:
+        """The noise level of a sample of weight 1 in the stacked record (weights
+        w/σ_e²): sqrt(N / Σ w_e,i/σ_e²) over the N samples of positive weight."""
+        if self.noise is None:
+            return None
+        w = self.data.w[self.data.w > 0]
+        return math.sqrt(len(w) / float(np.sum(w)))
+
+    def per_record(self, result) -> list[dict]:
+        """Per-record residual RMS and misfit diagnostics of a joint fit's result, from
+        its stacked residuals (no new simulation): r_e = (stacked slice) / sqrt(Σw_e/Σw),
+        i.e. r_e,i = sqrt(w_e,i/Σw_e) e_e,i, and the model at the samples y + e."""
+        total = float(sum(np.sum(d.w) for d in self.records))
+        n_free = len(result.free)
+        out, start = [], 0
+        for k, (pr, d) in enumerate(zip(self.problems, self.records)):
+            r = result.residuals[start:start + len(d)] / math.sqrt(float(np.sum(d.w)) / total)
+            start += len(d)
+            pos = d.w > 0
+            sigma = None if self.noise is None else self.noise[k]
+            diag = misfit_diagnostics(r[pos], noise=sigma, n_params=n_free)
+            e = np.where(pos, r / np.sqrt(np.where(pos, d.w / float(np.sum(d.w)), 1.0)), 0.0)
+            out.append(dict(record=k + 1, source=d.source, model=pr.name, n_samples=int(np.sum(pos)),
+                            residual_rms=math.sqrt(float(r @ r)), noise=sigma, diagnostics=diag,
+                            _t=d.t, _y=d.y, _model=d.y + e))
+        return out
+
+    def fit(self, init=None, **options):
+        """The joint fit from ``init`` (:func:`fit_joint`; options as
+        :func:`~.fit.fit_batch`, without ``noise`` and ``window``, given to the problem)."""
+        from .fit import fit_batch
+        result = fit_batch(self, [self.data], [init], noise=self.stacked_noise, **options)[0]
+        result.records = self.per_record(result)
+        return result
+
+
+def record_noise(noise, count: int) -> Optional[list[float]]:
+    """The noise level of each of ``count`` records from None, one σ or a sequence of
+    ``count`` σ (each > 0, output units); ModelError naming the entry otherwise."""
+    if noise is None:
+        return None
+    if np.ndim(noise) == 0:
+        return [check_positive("noise", noise, "output units")] * count
+    noise = list(noise)
+    if len(noise) != count:
+        raise ModelError(f"noise: give one level per record ({count}), got {len(noise)}")
+    return [check_positive(f"noise[{k}]", s, "output units") for k, s in enumerate(noise)]
+
+
+def fit_joint(problems: Sequence[Problem], records: Sequence[Measurements], init=None, *,
+              noise: Optional[float | Sequence[float]] = None, window: Optional[tuple] = None, **options):
     """One parameter set fitted to several experiments' records (module docstring).
-    Options as :func:`~.fit.fit` (without ``window`` and the discretization check).
+
+    Args:
+        problems: one problem per experiment or sensor (the same parameters).
+        records: the record of each problem, in the same order.
+        init: initial values {name: value} (one start).
+        noise: None, one σ for all records, or one σ per record (the standard deviation
+            of a sample of weight 1, each record's output unit): weights w/σ_e² and the
+            per-record χ² test of the residual RMS against σ_e.
+        window: (t_start, t_end) [s] applied to every record.
+        **options: as :func:`~.fit.fit_batch` (no discretization check).
 
     Returns a :class:`~.report.FitResult` over all samples (``data`` the concatenated
-    records; ``t_grid``/``y_fit`` the first experiment's curve)."""
-    from .fit import fit_batch
-    joint = JointProblem(problems, records)
-    return fit_batch(joint, [joint.data], [init], **options)[0]
+    records; ``t_grid``/``y_fit`` the first experiment's curve; ``records`` the
+    per-record residual RMS and misfit diagnostics, :meth:`JointProblem.per_record`)."""
+    return JointProblem(problems, records, noise, window).fit(init, **options)

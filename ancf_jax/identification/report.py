@@ -167,6 +167,9 @@ class FitResult:
         wall_time_s: fit time without compilation; compile_time_s: compilation.
         t_grid, y_fit, y_init: the simulated output on the step grid at the estimate and
             at the initial guess; data: the measurements fitted.
+        records: a joint fit's records (:func:`~.joint.fit_joint`): per record its
+            source, model, samples, residual RMS, stated noise and misfit diagnostics.
+        profiles: {name: profile-likelihood interval} (:func:`~.uncertainty.profile_interval`).
     """
 
     names: tuple
@@ -203,6 +206,8 @@ class FitResult:
     y_measured: Optional[np.ndarray] = None
     discretization: Optional[dict] = None
     bootstrap: Optional[dict] = None
+    records: Optional[list] = None
+    profiles: Optional[dict] = None
 
     # ------------------------------------------------------------------ verdicts
     def value(self, name: str) -> Optional[float]:
@@ -271,6 +276,8 @@ class FitResult:
                            "or the parameters are not separable: JᵀJ is singular)")
         if self.diagnostics:
             out += self.diagnostics["notes"]
+        for rec in self.records or ():
+            out += [f"record {rec['record']} ({rec['source']}): {n}" for n in rec["diagnostics"]["notes"]]
         if self.discretization:
             out += self.discretization["notes"]
         return out
@@ -279,7 +286,7 @@ class FitResult:
     def units_map(self) -> dict:
         """{key: unit} of the report's numbers whose key does not say its unit: each
         parameter (also as ``NAME_stderr``, ``NAME_upper_95`` and inside ``init``,
-        ``raw_estimates``, ``bootstrap``, ``discretization``), ``residual_rms`` and the
+        ``raw_estimates``, ``bootstrap``, ``discretization``, ``profile``), ``residual_rms`` and the
         noise (output unit), ``loss_history`` (output unit squared)."""
         out_u = self.output_unit or "output unit"
         units = {}
@@ -314,6 +321,11 @@ class FitResult:
         d["discretization"] = None if self.discretization is None else {
             k: v for k, v in self.discretization.items() if k != "notes"}
         d["bootstrap"] = self.bootstrap
+        if self.profiles is not None:
+            d["profile"] = self.profiles
+        if self.records is not None:
+            d["records"] = [{k: ({a: b for a, b in v.items() if a != "notes"} if k == "diagnostics" else v)
+                             for k, v in rec.items() if not k.startswith("_")} for rec in self.records]
         d["dt_s"] = self.dt
         d["elements"] = self.elements
         d.update(residual_rms=self.residual_rms, n_samples=self.n_samples,
@@ -355,16 +367,19 @@ class FitResult:
                 lines.append(f"  correlation({a}, {free[j]}) = {self.correlation[i, j]:+.3f}")
         lines.append(f"  residual RMS {self.residual_rms:.4g} (loss {self.loss_history[0]:.3g} -> "
                      f"{self.loss_history[-1]:.3g})")
-        dg = self.diagnostics
-        if dg:
-            noise = (f"; RMS / stated noise {dg['rms_over_noise']:.3g}" if dg.get("rms_over_noise") is not None
-                     else "")
-            lines.append(f"  residuals {'white' if dg['white'] else 'STRUCTURED'}: Ljung–Box p = "
-                         f"{dg['ljung_box_p']:.2g} ({dg['ljung_box_lags']} lags), lag-1 autocorrelation "
-                         f"{dg['lag1_autocorrelation']:+.3f}{noise}")
+        if self.diagnostics:
+            lines.append(f"  residuals {_whiteness(self.diagnostics)}")
+        for rec in self.records or ():
+            lines.append(f"  record {rec['record']} ({rec['source']}, {rec['model']}): {rec['n_samples']} samples, "
+                         f"residual RMS {rec['residual_rms']:.4g}; residuals {_whiteness(rec['diagnostics'])}")
         dz = self.discretization
         if dz:
             lines.append(f"  discretization: {dz['summary']}")
+        for n, iv in (self.profiles or {}).items():
+            u = self.units[self.names.index(n)]
+            low = "0 (its bound)" if iv["lower_at_bound"] else f"{iv['lower']:.6g}"
+            lines.append(f"  profile likelihood {n} (Δ = {iv['level']:g}): [{low}, {iv['upper']:.6g}] {u}; "
+                         f"Gauss–Newton ±{math.sqrt(iv['level']):g} SE [{iv['gn_lower']:.6g}, {iv['gn_upper']:.6g}]")
         bs = self.bootstrap
         if bs:
             lines.append("  bootstrap (" + str(bs["members"]) + " members): " + ", ".join(
@@ -377,6 +392,8 @@ class FitResult:
         from ..plotting import _finish, plt
         fig, (ax, ax2) = plt.subplots(2, 1, figsize=(7.5, 5.2), sharex=True,
                                       gridspec_kw=dict(height_ratios=[3, 1.3]))
+        if self.records:
+            return self._records_figure(fig, ax, ax2, ylabel, path)
         d = self.data
         if d is not None:
             ax.plot(d.t, d.y, ".", ms=2.0, color="0.55", label=f"data ({len(d)} samples)")
@@ -400,11 +417,39 @@ class FitResult:
         if d is not None:
             model = self.y_measured if self.y_measured is not None else np.interp(d.t, self.t_grid, self.y_fit)
             ax2.plot(d.t, model - d.y, ".", ms=1.5, color="tab:blue")
-        ax2.axhline(0.0, color="k", lw=0.6)
-        ax2.set_xlabel("time [s]")
-        ax2.set_ylabel("fit − data")
-        ax2.grid(alpha=0.3)
+        _residual_axis(ax2)
         return _finish(fig, path)
+
+    def _records_figure(self, fig, ax, ax2, ylabel, path):
+        """A joint fit's figure: each record's data and the fitted model at its samples,
+        and the residuals (model − data)."""
+        from ..plotting import _finish
+        for rec in self.records:
+            label = f"record {rec['record']} ({rec['source']})"
+            dots = ax.plot(rec["_t"], rec["_y"], ".", ms=2.0, alpha=0.5, label=f"{label}: data")[0]
+            ax.plot(rec["_t"], rec["_model"], color=dots.get_color(), lw=1.2, label=f"{label}: fitted")
+            ax2.plot(rec["_t"], rec["_model"] - rec["_y"], ".", ms=1.5, color=dots.get_color())
+        ax.set_ylabel(ylabel)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+        ax.set_title(f"joint fit of {len(self.records)} records: residual RMS {self.residual_rms:.3g}", fontsize=10)
+        _residual_axis(ax2)
+        return _finish(fig, path)
+
+
+def _residual_axis(ax2) -> None:
+    """Label the residual axis of a fit figure."""
+    ax2.axhline(0.0, color="k", lw=0.6)
+    ax2.set_xlabel("time [s]")
+    ax2.set_ylabel("fit − data")
+    ax2.grid(alpha=0.3)
+
+
+def _whiteness(dg: dict) -> str:
+    """``white: Ljung–Box p = …`` (or STRUCTURED) and RMS / stated noise, for a summary line."""
+    noise = f"; RMS / stated noise {dg['rms_over_noise']:.3g}" if dg.get("rms_over_noise") is not None else ""
+    return (f"{'white' if dg['white'] else 'STRUCTURED'}: Ljung–Box p = {dg['ljung_box_p']:.2g} "
+            f"({dg['ljung_box_lags']} lags), lag-1 autocorrelation {dg['lag1_autocorrelation']:+.3f}{noise}")
 
 
 def _num(x) -> Optional[float]:

@@ -29,6 +29,16 @@ from .data import Measurements
 from .problem import Problem
 
 
+def final_problem(problem: Problem, result) -> Problem:
+    """The problem on the result's final discretization: ``problem`` itself, or its
+    refined copy where the fit refined the step or mesh (``fit(..., discretization=True)``)."""
+    if result.dt is not None and problem.dt / result.dt > 1.5 or (
+            result.elements is not None and problem.elements is not None and result.elements != problem.elements):
+        return problem.refined(step=int(round(problem.dt / result.dt)),
+                               mesh=int(round(result.elements / problem.elements)) if result.elements else 1)
+    return problem
+
+
 def bootstrap(problem: Problem, result, members: int = 20, *, seed: int = 0, noise: Optional[float] = None,
               max_iterations: Optional[int] = None) -> dict:
     """Parametric bootstrap of a fit (module docstring). Returns a JSON-ready dict, also
@@ -37,11 +47,7 @@ def bootstrap(problem: Problem, result, members: int = 20, *, seed: int = 0, noi
     members, seed, sigma, estimates {name: [B values]}, mean, std, q025, q975,
     gn_stderr (the fit's), std_over_stderr, coverage_2se, converged (count)."""
     from .fit import fit_batch
-    if result.dt is not None and problem.dt / result.dt > 1.5 or (
-            result.elements is not None and problem.elements is not None and result.elements != problem.elements):
-        # the fit refined the discretization (fit(..., discretization=True)): bootstrap on the final one
-        problem = problem.refined(step=int(round(problem.dt / result.dt)),
-                                  mesh=int(round(result.elements / problem.elements)) if result.elements else 1)
+    problem = final_problem(problem, result)
     if int(members) < 2:
         raise ModelError(f"bootstrap members must be >= 2, got {members}")
     data = result.data
@@ -144,7 +150,8 @@ def profile_interval(problem: Problem, result, name: str, *, level: float = PROF
 
     Returns {name, estimate, gn_stderr, level, lower, upper, lower_at_bound,
     gn_lower, gn_upper, evaluations: [{value, delta}]} in the parameter's unit; the
-    result is not changed."""
+    result is not changed. A fit that refined its discretization is profiled on its
+    final step and mesh (:func:`final_problem`)."""
     if not level > 0:
         raise ModelError(f"profile_interval: level must be > 0 (Δ, a χ²(1) value), got {level}")
     if int(max_evaluations) < 2:
@@ -155,6 +162,7 @@ def profile_interval(problem: Problem, result, name: str, *, level: float = PROF
     p_hat, se = float(result.estimates[k]), float(result.stderr[k])
     if not np.isfinite(se) or se <= 0:
         raise ModelError(f"profile_interval: {name} has no finite standard error")
+    problem = final_problem(problem, result)
     positive = bool(problem.log_scaled[k])
     evaluations = []
 
