@@ -35,7 +35,7 @@ class AbstractConstraint(eqx.Module):
     in them, as the joints here are (positions S(ξ) e and slopes S'(ξ) e of beam points
     at fixed ξ). A joint declares this by ``linear_in_beam_coordinates = True`` on its
     class, and its points by the same flag on theirs
-    (:attr:`ancf_jax.points.AbstractPoint.linear_in_beam_coordinates`); for a joint that
+    (:class:`ancf_jax.points.AbstractPoint`); for a joint that
     does not (the default of a user's joint class: a joint between rigid bodies, for
     which the matrix is exact, or a distance |r_a − r_b| − ℓ between beam points, for
     which it is not) the Newton matrix warns, naming it
@@ -43,7 +43,6 @@ class AbstractConstraint(eqx.Module):
     """
 
     name: str = eqx.field(static=True)
-    linear_in_beam_coordinates: ClassVar[bool] = False
 
     @property
     @abc.abstractmethod
@@ -64,7 +63,10 @@ def linear_in_beam_coordinates(constraint: AbstractConstraint) -> bool:
     and the classes of all its points say so (:class:`AbstractConstraint`)."""
     points = [getattr(constraint, f.name) for f in dataclasses.fields(constraint)]
     points = [p for p in points if isinstance(p, AbstractPoint)]
-    return constraint.linear_in_beam_coordinates and all(p.linear_in_beam_coordinates for p in points)
+    # the flag is read from the class, False where a class does not set it (the bases do
+    # not declare it: a concrete class attribute there would be overridden by every joint)
+    return getattr(constraint, "linear_in_beam_coordinates", False) and all(
+        getattr(p, "linear_in_beam_coordinates", False) for p in points)
 
 
 class Coincident(AbstractConstraint):

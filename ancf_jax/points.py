@@ -22,10 +22,9 @@ class AbstractPoint(eqx.Module):
 
     ``linear_in_beam_coordinates``: position and direction are linear in the beam
     coordinates (a joint's requirement: :class:`ancf_jax.joints.AbstractConstraint`);
-    False unless a class declares it.
+    False unless a class declares it (``linear_in_beam_coordinates: ClassVar[bool] = True``;
+    not declared here, so that no class overrides a concrete attribute).
     """
-
-    linear_in_beam_coordinates: ClassVar[bool] = False
 
     @abc.abstractmethod
     def position(self, system, q):

@@ -577,7 +577,7 @@ class PantographSpec(Table):
     the same design (pantograph2, ...). The run ends when the last pantograph is one
     span past the evaluated spans (or at solver.t_end if earlier); `ancf-jax run`
     writes statistics.json, contact_force.csv and the figures, and with
-    `--set pantograph.speed_kmh=[V1, V2, ...]` runs the speeds in one vmapped batch
+    `--set pantograph.speed_kmh=[V1, V2, ...]` runs the speeds as single runs over threads
     (docs/pantograph-catenary.md)."""
 
     masses: Numbers = key(_PAN.masses, unit="kg", doc="m_i > 0 from the bottom (frame) to the head")
