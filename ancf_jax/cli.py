@@ -698,7 +698,7 @@ def _run_speeds(args, speeds, overrides, extra) -> int:
         raise _UsageError(f"{base.path}: {e}") from None
     t0 = time.perf_counter()
     try:
-        results = simulate_each([b[0] for b in built], [b[1] for b in built], on_failure="return", **kw)
+        results = simulate_each([b[0] for b in built], [b[1] for b in built], **kw)
     except SimulationInterrupted as e:  # Ctrl-C: the members that ran are written, the others named
         results = e.results
     wall = time.perf_counter() - t0
