@@ -145,6 +145,7 @@ def targets(data: dict) -> list:
                            f"{rows_b[size]['per_simulation_ratio_vs_one_exudyn_run'] / dict((k, l) for k, _, l in TARGETS)['batch_256']:.2g}× more (GPU row)")
         else:
             detail = _missing(b) or "no batch rows"
+    detail += _threaded_batch_detail()
     rows.append(("batch_256", value, detail))
     rows.append(("batch_256_gpu", *_gpu_batch_target(data)))
     rows.append(("gradient", *_gradient_target(data.get("gradient", {}))))
@@ -472,6 +473,21 @@ def sec_step_profile(d):
             "jitted alone in a loop of calls on changing input, best of 5 (µs):\n\n"
             + table(["part", "per call [µs]", "calls per step", "per step [µs]"], rows)
             + f"\n_Command: `python -m benchmarks.step_profile`; {d['stamp']['date']}._\n")
+
+
+def _threaded_batch_detail() -> str:
+    """The same batch as threads of single runs (batch_threads*.json), for the target
+    row: the verdict stays on the vmapped batch the target names."""
+    results = Path(__file__).parent / "results"
+    parts = []
+    for name, how in (("batch_threads", "threads of single runs (`simulate_each`)"),
+                      ("batch_threads_loop_kernels", "with loop kernels on (opt-in)")):
+        path = results / f"{name}.json"
+        if path.exists():
+            m = json.loads(path.read_text())
+            parts.append(f"{how} {f(m['ratio_to_one_exudyn_run']['two_threads'])} "
+                         f"({ms(m['per_simulation_s']['two_threads'])} per simulation, {m['members']} members)")
+    return ("; the same variants as " + ", ".join(parts) + " (batch_threads)") if parts else ""
 
 
 def _batch_threads_note() -> str:
