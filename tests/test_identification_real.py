@@ -185,7 +185,7 @@ def test_profile_likelihood_agrees_with_gauss_newton(problem, nuisance_fit):
 def test_profile_interval_solves_an_asymmetric_profile(monkeypatch, se, lower_z, bound):
     """The interval solver alone, on a closed-form profile (no simulation: ``profile``
     replaced): sqrt(Δ) = z^1.5 above and |z|^0.8 below the estimate, z = (p − p̂)/SE,
-    so Δ = 4 at z = 2^(2/3) (reached from the first trial at z = 2 by regula falsi) and
+    so Δ = 4 at z = 2^(2/3) (bracketed by the first trial at z = 2, then Brent) and
     z = −2^(5/4) (after stepping out from −2), each to the solver's tolerance. With SE twice as
     large the lower root lies below 0 and the positive parameter's end is its bound."""
     from types import SimpleNamespace

@@ -140,10 +140,11 @@ def profile_interval(problem: Problem, result, name: str, *, level: float = PROF
     """Profile-likelihood interval of one free parameter: on each side of p̂_k the value
     where Δ(p_k) of :func:`profile` reaches ``level`` (default 4, the counterpart of
     p̂ ± 2 SE). Each side starts at sqrt(level) Gauss–Newton standard errors, steps out
-    by factors of 2 until Δ ≥ level, and then solves sqrt(Δ) = sqrt(level) by regula
-    falsi (Illinois) on sqrt(Δ), which is linear in p_k where the linearisation holds
-    (one step then), to |sqrt(Δ) − sqrt(level)| <= ``tol`` within ``max_evaluations``
-    per side (else ModelError). For a positive parameter
+    by factors of 2 until Δ ≥ level, and then solves sqrt(Δ) = sqrt(level) in that
+    bracket by Brent's method (``scipy.optimize.brentq``) on sqrt(Δ), which is linear in
+    p_k where the linearisation holds, to a step of 0.05 ``tol`` SE (|sqrt(Δ) −
+    sqrt(level)| well within ``tol``) in at most ``max_evaluations`` evaluations per side
+    (else ModelError). For a positive parameter
     (fitted on log p) whose profile stays below the level down to 1e-8 p̂, the lower end
     is its bound 0 (``lower_at_bound``). Every side costs a few refits of the other
     free parameters (the fit's compiled program).
@@ -165,16 +166,20 @@ def profile_interval(problem: Problem, result, name: str, *, level: float = PROF
     problem = final_problem(problem, result)
     positive = bool(problem.log_scaled[k])
     evaluations = []
+    known = {p_hat: -float(np.sqrt(level))}  # Δ = 0 at the estimate; each value refitted once
 
     def root(x: float) -> float:  # sqrt(Δ) − sqrt(level) at p_k = x
-        (pt,) = profile(problem, result, name, steps=((x - p_hat) / se,), max_iterations=max_iterations)["points"]
-        evaluations.append(dict(value=pt["value"], delta=pt["delta"]))
-        return float(np.sqrt(max(pt["delta"], 0.0)) - np.sqrt(level))
+        x = float(x)
+        if x not in known:
+            (pt,) = profile(problem, result, name, steps=((x - p_hat) / se,),
+                            max_iterations=max_iterations)["points"]
+            evaluations.append(dict(value=pt["value"], delta=pt["delta"]))
+            known[x] = float(np.sqrt(max(pt["delta"], 0.0)) - np.sqrt(level))
+        return known[x]
 
     def side(sign: int):
         """(end, at_bound) on one side."""
-        a, ga = p_hat, -float(np.sqrt(level))
-        b = p_hat + sign * np.sqrt(level) * se
+        a, b = p_hat, p_hat + sign * np.sqrt(level) * se
         first = len(evaluations)
         while True:
             if sign < 0 and positive and b <= 1e-8 * p_hat:
@@ -189,23 +194,19 @@ def profile_interval(problem: Problem, result, name: str, *, level: float = PROF
             if len(evaluations) - first >= max_evaluations:
                 raise ModelError(f"profile_interval: Δ of {name} stays below {level:g} out to {b:g} "
                                  f"({max_evaluations} evaluations)")
-            a, ga, b = b, gb, p_hat + 2 * (b - p_hat)
-        last = 0
-        while abs(gb) > tol:  # gb is always a true value (Illinois halves only ga)
-            if len(evaluations) - first >= max_evaluations:
-                raise ModelError(f"profile_interval: Δ of {name} = {level:g} not solved to {tol:g} in "
-                                 f"{max_evaluations} evaluations (near {b:g})")
-            c = b - gb * (b - a) / (gb - ga)
-            gc = root(c)
-            if gc * gb < 0:
-                a, ga = b, gb
-                last = 0
-            else:
-                if last:  # Illinois: halve the stale end's value
-                    ga /= 2
-                last = 1
-            b, gb = c, gc
-        return b, False
+            a, b = b, p_hat + 2 * (b - p_hat)
+        if abs(gb) <= tol:
+            return b, False
+        # the root of sqrt(Δ) − sqrt(level) in the bracket (a, b): Brent's method (scipy),
+        # to a step far below what |sqrt(Δ) − sqrt(level)| <= tol needs (its slope is ~1/SE)
+        from scipy.optimize import brentq
+        try:
+            end = brentq(root, min(a, b), max(a, b), xtol=0.05 * tol * se, rtol=1e-12,
+                         maxiter=max(1, max_evaluations - (len(evaluations) - first)))
+        except RuntimeError:
+            raise ModelError(f"profile_interval: Δ of {name} = {level:g} not solved to {tol:g} in "
+                             f"{max_evaluations} evaluations (between {a:g} and {b:g})") from None
+        return float(end), False
 
     lower, at_bound = side(-1)
     upper, _ = side(+1)
