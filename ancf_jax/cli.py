@@ -297,7 +297,8 @@ def build_parser() -> argparse.ArgumentParser:
     fit.add_argument("--nuisance", default="", metavar="NAMES",
                      help="nuisance parameters of the measurement fitted with the others, comma-separated: "
                           "time_offset (trigger delay: the record's t is the model's t + tau), offset, gain "
-                          "(the sensor reads gain * y + offset); default none")
+                          "(the sensor reads gain * y + offset); default none; with --joint each record has "
+                          "its own, reported as NAME@k for record k")
     fit.add_argument("--max-steps", type=_positive_int, default=None,
                      help=f"the most time steps of one simulation accepted (default {MAX_STEPS:.0e}; a "
                           "longer one is refused before compiling)")
@@ -312,6 +313,10 @@ def build_parser() -> argparse.ArgumentParser:
                           "moves by more than 0.3 standard errors)")
     fit.add_argument("--refine-budget", type=_nonnegative_int, default=2,
                      help="most refinement rounds of the discretization check (default 2; 0: check only)")
+    fit.add_argument("--no-strain-check", action="store_true",
+                     help="skip the model-form check (by default, after the discretization check, the "
+                          "estimate is re-evaluated with the beams' other strain measures and the combined "
+                          "uncertainty reported)")
     fit.add_argument("--bootstrap", type=_nonnegative_int, default=0, metavar="N",
                      help="parametric bootstrap with N synthetic records fitted as one vmapped batch "
                           "(default 0: off)")
@@ -1043,7 +1048,7 @@ def _parse_init(text: str) -> dict:
     return out
 
 
-def _joint_problems(args, names, records) -> list:
+def _joint_problems(args, names, records, nuisance=()) -> list:
     """One identification problem per ``--data`` record of ``fit --joint``: the model
     with ``--set`` and the record's own ``--record-set`` overrides (one-line errors
     naming the record, nothing compiled)."""
@@ -1052,7 +1057,7 @@ def _joint_problems(args, names, records) -> list:
         sets = records.get(k, {}).get("set", [])
         try:
             pr = _identification_problem(argparse.Namespace(**{**vars(args), "overrides": args.overrides + sets}),
-                                         names)
+                                         names, nuisance)
         except _UsageError as e:
             if not sets:
                 raise
@@ -1079,8 +1084,6 @@ def _check_joint(args, inits, records) -> list | None:
         raise _UsageError(f"argument --joint: give at most one --init (a joint fit has one start), got {len(inits)}")
     if args.bootstrap:
         raise _UsageError("argument --bootstrap: not with --joint (the bootstrap resamples one record)")
-    if args.nuisance.strip():
-        raise _UsageError("argument --nuisance: not with --joint (a joint fit has no nuisance parameters)")
     noise = [records.get(k, {}).get("noise") or args.noise for k in range(len(args.data))]
     if all(n is None for n in noise):
         return None
@@ -1113,21 +1116,23 @@ def _fit(args) -> int:
     names = list(dict.fromkeys(["alpha", "beta"] + requested))
     nuisance = [n.strip() for n in args.nuisance.split(",") if n.strip()]
     problem = _identification_problem(args, names, nuisance)
-    free = [p.name for p in problem.params if p.name in requested] + list(problem.nuisance)
-    for i in inits:
-        unknown = set(i) - set(problem.names)
-        if unknown:
-            raise _UsageError(f"argument --init: unknown parameter(s) {', '.join(sorted(unknown))} "
-                              f"(parameters: {', '.join(problem.names)})")
-    for name in args.profile:
-        if name not in free:
-            raise _UsageError(f"argument --profile: {name!r} is not a fitted parameter (fitted: {', '.join(free)})")
     joint = None
     if args.joint:
         try:
-            joint = JointProblem(_joint_problems(args, names, records), datasets, noises, window=args.window)
+            joint = JointProblem(_joint_problems(args, names, records, nuisance), datasets, noises,
+                                 window=args.window)
         except (DataError, ModelError) as e:
             raise _UsageError(str(e)) from None
+    target = joint or problem  # a joint fit's nuisance parameters are per record: offset@2
+    free = [p.name for p in problem.params if p.name in requested] + list(target.nuisance)
+    for i in inits:
+        unknown = set(i) - set(target.names)
+        if unknown:
+            raise _UsageError(f"argument --init: unknown parameter(s) {', '.join(sorted(unknown))} "
+                              f"(parameters: {', '.join(target.names)})")
+    for name in args.profile:
+        if name not in free:
+            raise _UsageError(f"argument --profile: {name!r} is not a fitted parameter (fitted: {', '.join(free)})")
     out = _check_out(Path(args.out) if args.out is not None else Path("results") / f"{problem.name}-fit")
     options = dict(free=free, method=args.method, max_iterations=args.max_iter, progress=not args.no_progress)
     try:
@@ -1140,7 +1145,8 @@ def _fit(args) -> int:
         elif len(datasets) == 1 and len(inits) <= 1:
             # one record: the discretization check (and refinement) unless --no-refine
             results = [fit(problem, datasets[0], inits[0] if inits else None, discretization=not args.no_refine,
-                           refine_budget=args.refine_budget, window=args.window, noise=args.noise, **options)]
+                           refine_budget=args.refine_budget, strain_measure=not args.no_strain_check,
+                           window=args.window, noise=args.noise, **options)]
             if args.bootstrap:
                 bootstrap(problem, results[0], args.bootstrap)
         else:

@@ -15,8 +15,11 @@ Two ways of fitting α (β fixed at its true 0) are compared:
    --no-refine`` does);
 2. ``default``: the default of ``ancf-jax fit``: the fit of seed 0 runs the
    discretization check (step halved, mesh doubled, refine while an estimate moves by
-   more than 0.3 SE, budget ``--budget``, 2 by default), and all seeds are then fitted
-   on the discretization it ended at.
+   more than 0.3 SE, budget ``--budget``, 2 by default) and the strain-measure check,
+   and all seeds are then fitted on the discretization it ended at; their coverage is
+   reported for the Gauss–Newton SE and for the combined standard uncertainty of Eq. U
+   (SE of each seed with seed 0's discretization and strain-measure shifts in
+   quadrature).
 
 Each set of seeds is one vmapped batch. Reported per way: mean estimate, mean reported
 SE, the scatter (std) of the estimates over seeds, scatter / SE (should be 1 ± 0.3),
@@ -47,15 +50,35 @@ OUT = Path(__file__).parent / "results" / "identification_coverage.json"
 TRUTH = 0.02
 
 
-def stats(results, truth=TRUTH):
+def stats(results, truth=TRUTH, type_b=None):
+    """Coverage statistics of α over the seeds; with ``type_b`` (the check's shifts of
+    α [1/s]: discretization axes and strain measure, from seed 0) also those of the
+    combined standard uncertainty u = sqrt(SE² + Σ shift²) of each seed (Eq. U of
+    ancf_jax.identification.discretization)."""
     est = np.array([r.estimates[0] for r in results])
     se = np.array([r.stderr[0] for r in results])
     z = (est - truth) / se
-    return dict(mean=float(est.mean()), mean_se=float(se.mean()), scatter=float(est.std(ddof=1)),
-                scatter_over_se=float(est.std(ddof=1) / se.mean()), rms_z=float(np.sqrt(np.mean(z ** 2))),
-                coverage_2se=float(np.mean(np.abs(z) <= 2.0)), max_abs_z=float(np.max(np.abs(z))),
-                white=float(np.mean([r.diagnostics["white"] for r in results])),
-                converged=int(sum(r.converged for r in results)), estimates=est.tolist(), stderr=se.tolist())
+    out = dict(mean=float(est.mean()), mean_se=float(se.mean()), scatter=float(est.std(ddof=1)),
+               scatter_over_se=float(est.std(ddof=1) / se.mean()), rms_z=float(np.sqrt(np.mean(z ** 2))),
+               coverage_2se=float(np.mean(np.abs(z) <= 2.0)), max_abs_z=float(np.max(np.abs(z))),
+               white=float(np.mean([r.diagnostics["white"] for r in results])),
+               converged=int(sum(r.converged for r in results)), estimates=est.tolist(), stderr=se.tolist())
+    if type_b:
+        u = np.sqrt(se ** 2 + sum(v ** 2 for v in type_b.values()))
+        zu = (est - truth) / u
+        out.update(type_b=type_b, mean_u=float(u.mean()), scatter_over_u=float(est.std(ddof=1) / u.mean()),
+                   coverage_2u=float(np.mean(np.abs(zu) <= 2.0)), combined_uncertainty=u.tolist())
+    return out
+
+
+def type_b_shifts(checked) -> dict:
+    """Seed 0's shifts of α [1/s] that Eq. U adds to the SE: the last round's
+    discretization axes and the strain-measure exchange (None where not checked)."""
+    out = {f"discretization_{a}": c["shift"].get("alpha", 0.0)
+           for a, c in checked.discretization["rounds"][-1]["checks"].items()}
+    if checked.model_form is not None:
+        out["strain_measure"] = checked.model_form["shift"].get("alpha", 0.0)
+    return out
 
 
 def formulation_overrides(kind: str) -> tuple[str, ...]:
@@ -134,6 +157,8 @@ def main():
     res["check_s"] = time.perf_counter() - t1
     res["discretization"] = {k: v for k, v in checked.discretization.items() if k != "notes"}
     res["discretization"]["notes"] = checked.discretization["notes"]
+    res["model_form"] = checked.model_form
+    type_b = type_b_shifts(checked)
     ways = {"coarse": coarse}
     dz = checked.discretization
     final = coarse.refined(step=int(round(coarse.dt / dz["final_dt_s"])),
@@ -142,12 +167,17 @@ def main():
     for name, pr in ways.items():
         t2 = time.perf_counter()
         results = fit_batch(pr, sets, [init], free=("alpha",), noise=args.noise)
-        res[name] = dict(dt=pr.dt, elements=pr.elements, **stats(results), wall_s=time.perf_counter() - t2)
+        res[name] = dict(dt=pr.dt, elements=pr.elements, **stats(results, type_b=type_b if name == "default" else None),
+                         wall_s=time.perf_counter() - t2)
         s = res[name]
+        combined = (f"; combined u {s['mean_u']:.5f}: scatter/u {s['scatter_over_u']:.2f}, within 2 u "
+                    f"{s['coverage_2u']:.0%}" if "mean_u" in s else "")
         print(f"{name:8s} h = {pr.dt:g} s, {pr.elements} elements: mean {s['mean']:.5f}, SE {s['mean_se']:.5f}, "
               f"scatter/SE {s['scatter_over_se']:.2f}, within 2 SE {s['coverage_2se']:.0%}, "
-              f"white {s['white']:.0%} ({s['wall_s']:.0f} s)", flush=True)
+              f"white {s['white']:.0%}{combined} ({s['wall_s']:.0f} s)", flush=True)
     print("check:", dz["summary"])
+    if checked.model_form is not None:
+        print("strain measure:", checked.model_form["summary"])
     if args.bootstrap:
         # the parametric bootstrap of seed 0's fit: one vmapped batch of as many members as
         # seeds on the final discretization (the program of the batch above)

@@ -174,7 +174,8 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
         raise ModelError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     B = len(p0)
     islog = problem.log_scaled
-    bound = np.array([problem.max_time_offset if n == "time_offset" else math.inf for n in names])
+    # (a joint fit's time offsets are named time_offset@e)
+    bound = np.array([problem.max_time_offset if n.split("@")[0] == "time_offset" else math.inf for n in names])
     if use_optax and not islog[mask].all():
         raise ModelError("nuisance parameters (time_offset, offset, gain) and parameters at values <= 0 "
                          "are fitted by method 'lm' only (optax steps log p)")
@@ -362,7 +363,8 @@ def fit(problem: Problem, data: Measurements, init: dict | Sequence[float] | Non
         max_iterations: int | None = None, xtol: float = XTOL, ftol: float = FTOL, gtol: float = GTOL,
         learning_rate: float = LEARNING_RATE, optimizer=None, progress=False, noise: Optional[float] = None,
         discretization: bool = False, refine: bool = True, refine_budget: int = 2,
-        shift_limit: float = 0.3, refine_axes: Sequence[str] = ("step", "mesh")) -> FitResult:
+        shift_limit: float = 0.3, refine_axes: Sequence[str] = ("step", "mesh"),
+        strain_measure: bool = True) -> FitResult:
     """Fit the problem's parameters to one data set.
 
     Args:
@@ -392,6 +394,9 @@ def fit(problem: Problem, data: Measurements, init: dict | Sequence[float] | Non
             more than ``shift_limit`` standard errors, at most ``refine_budget`` times.
         refine_axes: which refinements the check makes: ``"step"`` (h/2) and/or
             ``"mesh"`` (elements × 2; problems built from a scenario with one beam).
+        strain_measure: with ``discretization``, also the model-form check: the estimate
+            re-evaluated with the beams' strain measures exchanged, reported with the
+            combined uncertainty (``result.model_form``; scenario-built problems).
 
     Returns:
         :class:`~.report.FitResult`.
@@ -407,7 +412,8 @@ def fit(problem: Problem, data: Measurements, init: dict | Sequence[float] | Non
         return one(problem, data, init, **options)
     from .discretization import controlled_fit
     result, _ = controlled_fit(one, problem, data, init, refine=refine, budget=refine_budget,
-                               limit=shift_limit, axes=tuple(refine_axes), **options)
+                               limit=shift_limit, axes=tuple(refine_axes), strain_measure=strain_measure,
+                               **options)
     return result
 
 

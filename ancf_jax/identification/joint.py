@@ -24,6 +24,15 @@ r_e (``FitResult.records``), as well as over the stacked residuals, where the st
 noise is the one of the weights w/σ², sqrt(N / Σ w_e,i/σ_e²), so that the χ² statistic
 is Σ_e Σ_i w_e,i e_e,i² / σ_e². The per-record χ² tests count every free parameter
 against each record's samples (conservative: the parameters are shared).
+
+Nuisance parameters per record. Problems with nuisance parameters (time offset τ,
+sensor offset c, gain g; Eq. M of :func:`~.problem.measured`) keep them per record: the
+joint parameter vector is the shared physical parameters followed by each record's
+nuisance parameters, named ``NAME@e`` (``offset@2``: the offset of record 2), and
+record e's residuals depend on the shared parameters and its own nuisance parameters
+only (its Jacobian columns of the other records' nuisance parameters are zero). Two
+sensors of one experiment thus each get their own offset and gain, and records of
+different experiments their own trigger delay.
 """
 
 from __future__ import annotations
@@ -44,9 +53,20 @@ class JointData(Measurements):
     """The records of a joint fit, concatenated (times restart per experiment)."""
 
 
+def joint_name(name: str, record: int) -> str:
+    """The joint parameter name of a record's nuisance parameter (record counted from 1)."""
+    return f"{name}@{record}"
+
+
+def base_name(name: str) -> str:
+    """A parameter's name without a joint fit's record suffix (``offset@2`` -> ``offset``)."""
+    return name.split("@", 1)[0]
+
+
 class JointProblem:
-    """Experiments (problems with the same parameter names, without nuisance
-    parameters) and their records, fitted with one parameter set (:func:`fit_joint`).
+    """Experiments (problems with the same physical parameters; each may have its own
+    nuisance parameters, module docstring) and their records, fitted with one physical
+    parameter set (:func:`fit_joint`).
 
     ``noise``: None, one σ for every record, or one σ per record (output units; module
     docstring); the records' weights are then divided by σ_e². ``window``: (t_start,
@@ -57,13 +77,11 @@ class JointProblem:
         if len(problems) < 2 or len(problems) != len(records):
             raise ModelError(f"a joint fit needs at least two experiments with one record each, got "
                              f"{len(problems)} problems and {len(records)} records")
-        names = problems[0].names
+        physical = problems[0].names[:problems[0].n_physical]
         for p in problems:
-            if p.names != names:
-                raise ModelError(f"joint fit: every experiment must have the parameters {', '.join(names)}; "
-                                 f"one has {', '.join(p.names)}")
-            if p.nuisance:
-                raise ModelError("joint fit: nuisance parameters are not supported across experiments")
+            if p.names[:p.n_physical] != physical:
+                raise ModelError(f"joint fit: every experiment must have the parameters {', '.join(physical)}; "
+                                 f"one has {', '.join(p.names[:p.n_physical])}")
         self.problems = list(problems)
         #: the noise level of each record (None: not stated)
         self.noise = record_noise(noise, len(records))
@@ -73,11 +91,21 @@ class JointProblem:
                             for d, s in zip(self.records, self.noise)]
         self.sizes = [len(d) for d in self.records]
         first = self.problems[0]
-        self.system, self.params, self.output, self.nuisance = first.system, first.params, first.output, ()
+        k = first.n_physical
+        #: the joint vector's index of each record's parameters (physical, then its nuisance)
+        self.columns, nuisance, units = [], [], list(first.units[:k])
+        for e, pr in enumerate(self.problems):
+            start = k + len(nuisance)
+            self.columns.append(np.r_[np.arange(k), start + np.arange(len(pr.nuisance))].astype(int))
+            nuisance += [joint_name(n, e + 1) for n in pr.nuisance]
+            units += list(pr.units[k:])
+        self.system, self.params, self.output, self.nuisance = first.system, first.params, first.output, tuple(nuisance)
+        if len({p.max_time_offset for p in self.problems}) > 1:
+            raise ModelError("joint fit: every experiment must have the same max_time_offset")
         self.max_time_offset, self.dt, self.elements = first.max_time_offset, first.dt, first.elements
         self.name = " + ".join(p.name for p in problems)
-        self.names, self.units, self.n_physical = names, first.units, first.n_physical
-        self.log_scaled = first.log_scaled
+        self.names, self.units, self.n_physical = physical + self.nuisance, tuple(units), k
+        self.log_scaled = np.r_[first.log_scaled[:k], np.zeros(len(nuisance), bool)]
         self.data = JointData(np.concatenate([d.t for d in self.records]),
                               np.concatenate([d.y for d in self.records]),
                               np.concatenate([d.w for d in self.records]), None,
@@ -88,7 +116,26 @@ class JointProblem:
         return sum(p.compile_time_s for p in self.problems)
 
     def vector(self, values=None) -> np.ndarray:
-        return self.problems[0].vector(values)
+        """The joint parameter vector from {name: value} (nuisance parameters by their
+        joint names ``NAME@e``) or a sequence in :attr:`names` order; missing names keep
+        the first system's values and the nuisance parameters' neutral values."""
+        if values is not None and not isinstance(values, dict):
+            arr = np.asarray(values, float).reshape(-1)
+            if arr.shape != (len(self.names),):
+                raise ModelError(f"expected {len(self.names)} parameter values ({', '.join(self.names)}), "
+                                 f"got {arr.size}")
+            values = dict(zip(self.names, arr))
+        values = dict(values or {})
+        unknown = set(values) - set(self.names)
+        if unknown:
+            raise ModelError(f"unknown parameter(s) {sorted(unknown)}; this joint fit has {', '.join(self.names)}")
+        p = np.zeros(len(self.names))
+        # the first record last: its system's values of the physical parameters stand
+        for e, (pr, cols) in reversed(list(enumerate(zip(self.problems, self.columns)))):
+            own = {n: values[joint_name(n, e + 1) if i >= self.n_physical else n]
+                   for i, n in enumerate(pr.names) if (joint_name(n, e + 1) if i >= self.n_physical else n) in values}
+            p[cols] = pr.vector(own)  # each record's checks (ranges, bounds) with its own names
+        return p
 
     def prepare(self, data, window=None):
         if window is not None:
@@ -99,10 +146,13 @@ class JointProblem:
         """Stacked residuals and Jacobians of the experiments (shapes as
         :meth:`Problem.evaluate`, the first experiment's output curve and layout)."""
         total = float(sum(np.sum(d.w) for d in self.records))
+        p = np.atleast_2d(np.asarray(p, float))
         rs, js, oks = [], [], []
         first = None
-        for pr, d in zip(self.problems, self.records):
-            r, jac, yg, ok, layout, _ = pr.evaluate(p, [d])
+        for pr, d, cols in zip(self.problems, self.records, self.columns):
+            r, jac_e, yg, ok, layout, _ = pr.evaluate(p[:, cols], [d])
+            jac = np.zeros(jac_e.shape[:2] + (p.shape[1],))
+            jac[:, :, cols] = jac_e
             f = np.sqrt(np.sum(d.w) / total)
             rs.append(f * r)
             js.append(f * jac)

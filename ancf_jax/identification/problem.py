@@ -366,6 +366,22 @@ class Problem:
                                      solver_options=rc["solver_options"], nuisance=self.nuisance,
                                      max_time_offset=self.max_time_offset)
 
+    def reformulated(self, formulations: dict) -> "Problem":
+        """The same problem (step, mesh, parameters, output) with the beams' strain
+        measures replaced: ``formulations`` maps a beam name to {Formulation field:
+        value} (scenario-built problems only)."""
+        if self.recipe is None:
+            raise ModelError("the strain measures of this problem cannot be changed (it was not built from a "
+                             "scenario)")
+        import json
+        rc = self.recipe
+        extra = tuple(f"beams.{b}.formulation.{k}={json.dumps(v)}" for b, f in formulations.items()
+                      for k, v in f.items())
+        return Problem.from_scenario(rc["source"], rc["params"], rc["output"], overrides=rc["overrides"] + extra,
+                                     elements=self.elements, t_end=rc["t_end"], dt=self.dt,
+                                     solver_options=rc["solver_options"], nuisance=self.nuisance,
+                                     max_time_offset=self.max_time_offset)
+
     # ------------------------------------------------------------------ parameters
     @property
     def names(self) -> tuple[str, ...]:

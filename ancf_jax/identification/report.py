@@ -170,6 +170,9 @@ class FitResult:
         records: a joint fit's records (:func:`~.joint.fit_joint`): per record its
             source, model, samples, residual RMS, stated noise and misfit diagnostics.
         profiles: {name: profile-likelihood interval} (:func:`~.uncertainty.profile_interval`).
+        discretization: the discretization check's record (:mod:`.discretization`).
+        model_form: the strain-measure check's record, with the combined standard
+            uncertainty ``total_stderr`` (Eq. U of :mod:`.discretization`).
     """
 
     names: tuple
@@ -208,6 +211,7 @@ class FitResult:
     bootstrap: Optional[dict] = None
     records: Optional[list] = None
     profiles: Optional[dict] = None
+    model_form: Optional[dict] = None
 
     # ------------------------------------------------------------------ verdicts
     def value(self, name: str) -> Optional[float]:
@@ -280,13 +284,15 @@ class FitResult:
             out += [f"record {rec['record']} ({rec['source']}): {n}" for n in rec["diagnostics"]["notes"]]
         if self.discretization:
             out += self.discretization["notes"]
+        if self.model_form:
+            out += self.model_form["notes"]
         return out
 
     # ------------------------------------------------------------------ output
     def units_map(self) -> dict:
         """{key: unit} of the report's numbers whose key does not say its unit: each
         parameter (also as ``NAME_stderr``, ``NAME_upper_95`` and inside ``init``,
-        ``raw_estimates``, ``bootstrap``, ``discretization``, ``profile``), ``residual_rms`` and the
+        ``raw_estimates``, ``bootstrap``, ``discretization``, ``model_form``, ``profile``), ``residual_rms`` and the
         noise (output unit), ``loss_history`` (output unit squared)."""
         out_u = self.output_unit or "output unit"
         units = {}
@@ -320,6 +326,8 @@ class FitResult:
             k: v for k, v in self.diagnostics.items() if k != "notes"}
         d["discretization"] = None if self.discretization is None else {
             k: v for k, v in self.discretization.items() if k != "notes"}
+        d["model_form"] = None if self.model_form is None else {
+            k: v for k, v in self.model_form.items() if k != "notes"}
         d["bootstrap"] = self.bootstrap
         if self.profiles is not None:
             d["profile"] = self.profiles
@@ -375,6 +383,8 @@ class FitResult:
         dz = self.discretization
         if dz:
             lines.append(f"  discretization: {dz['summary']}")
+        if self.model_form:
+            lines.append(f"  strain measure: {self.model_form['summary']}")
         for n, iv in (self.profiles or {}).items():
             u = self.units[self.names.index(n)]
             low = "0 (its bound)" if iv["lower_at_bound"] else f"{iv['lower']:.6g}"
