@@ -244,7 +244,7 @@ def test_discretization_check_catches_step_bias(plain):
     sigma = 2e-5
     rec = _foreign_record(plain.refined(step=4), sigma, 5, "finer step")
     res = fit(plain, rec, {"alpha": 0.01, "beta": 0.0}, free=("alpha",), noise=sigma, discretization=True,
-              refine_axes=("step",), refine_budget=0)
+              refine_axes=("step",), refine_budget=0, strain_measure=False)
     dz = res.discretization
     first = dz["rounds"][0]["checks"]["step"]
     assert first["max_shift_se"] > 0.3, first
@@ -277,7 +277,7 @@ def test_discretization_refines_the_mesh_within_its_budget(plain, tmp_path, caps
     sigma = 1e-4
     rec = _foreign_record(plain.refined(mesh=2), sigma, 3, "6 elements")
     res = fit(plain, rec, {"alpha": 0.02, "beta": 0.0}, free=("alpha",), noise=sigma, discretization=True,
-              refine_axes=("mesh",), refine_budget=1)
+              refine_axes=("mesh",), refine_budget=1, strain_measure=False)
     dz = res.discretization
     first, last = (r["checks"]["mesh"] for r in dz["rounds"])
     assert [r["elements"] for r in dz["rounds"]] == [3, 6] and dz["axes"] == ["mesh"]
@@ -300,6 +300,7 @@ def test_discretization_refines_the_mesh_within_its_budget(plain, tmp_path, caps
     out = tmp_path / "fit"
     main(["fit", "m1", "--elements", str(ELEMENTS), "--t-end", str(T_END), "--dt", str(DT), "--data", str(path),
           "--params", "alpha", "--init", "alpha=0.02,beta=0", "--noise", str(sigma), "--refine-budget", "0",
+          "--no-strain-check",
           "--no-figures", "--no-progress", "--out", str(out)])
     report = assert_unit_keys(out / "fit.json")
     cli = report["discretization"]
@@ -310,7 +311,7 @@ def test_discretization_refines_the_mesh_within_its_budget(plain, tmp_path, caps
 
 
 @pytest.mark.slow  # two new compilations (the other strain measures at 3 elements: values, the refit's Jacobian)
-def test_strain_measure_check_predicts_the_refit(plain):
+def test_strain_measure_check_predicts_the_refit(plain, tmp_path, capsys):
     """Model form: a record made with the other strain measures (engineering axial
     strain, material curvature; the same mesh and step, 20 µm noise) fitted with the
     default ones (Green–Lagrange, exact curvature), the discretization check on no axis
@@ -322,7 +323,8 @@ def test_strain_measure_check_predicts_the_refit(plain):
     combined uncertainty is Eq. U (SE and the shift in quadrature), and the note and
     summary say that the estimate depends on the strain measure when the shift exceeds
     0.3 SE (here 13 SE; on Exudyn's 48-element record about 0.6 SE,
-    benchmarks/identification_coverage.py)."""
+    benchmarks/identification_coverage.py). ``ancf-jax fit`` runs the check by default
+    and reports the same shift."""
     sigma = 2e-5
     exchanged = {"beam": {"axial_strain": "engineering", "curvature": "material"}}
     other = plain.reformulated(exchanged)
@@ -344,6 +346,19 @@ def test_strain_measure_check_predicts_the_refit(plain):
     d = assert_unit_keys(res.to_dict())
     assert d["model_form"]["total_stderr"]["alpha"] == mf["total_stderr"]["alpha"] and "notes" not in d["model_form"]
     json.dumps(d)
+
+    # the command line's default: the check runs (the programs of this module's tests)
+    from ancf_jax.cli import main
+    from ancf_jax.identification import write_csv
+    path = tmp_path / "other.csv"
+    write_csv(path, rec.t, rec.y, precision=17)
+    out = tmp_path / "fit"
+    assert main(["fit", "m1", "--elements", str(ELEMENTS), "--t-end", str(T_END), "--dt", str(DT), "--data",
+                 str(path), "--params", "alpha", "--init", "alpha=0.02,beta=0", "--noise", str(sigma),
+                 "--refine-budget", "0", "--no-figures", "--no-progress", "--out", str(out)]) == 0
+    cli = assert_unit_keys(out / "fit.json")["model_form"]
+    assert cli["exchanged"] == exchanged and cli["shift"]["alpha"] == pytest.approx(mf["shift"]["alpha"], rel=1e-6)
+    assert f"  strain measure: {cli['summary']}" in capsys.readouterr().out
 
 
 # ---------------------------------------------------------------------------- joint
