@@ -76,7 +76,7 @@ def type_b_shifts(checked) -> dict:
     discretization axes and the strain-measure exchange (None where not checked)."""
     out = {f"discretization_{a}": c["shift"].get("alpha", 0.0)
            for a, c in checked.discretization["rounds"][-1]["checks"].items()}
-    if checked.model_form is not None:
+    if checked.model_form is not None and checked.model_form["checked"]:
         out["strain_measure"] = checked.model_form["shift"].get("alpha", 0.0)
     return out
 

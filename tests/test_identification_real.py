@@ -332,7 +332,7 @@ def test_strain_measure_check_predicts_the_refit(plain, tmp_path, capsys):
     res = fit(plain, rec, {"alpha": 0.02, "beta": 0.0}, free=("alpha",), noise=sigma, discretization=True,
               refine_axes=())
     mf = res.model_form
-    assert mf["exchanged"] == exchanged and mf["dt_s"] == DT and mf["elements"] == ELEMENTS
+    assert mf["exchanged"] == exchanged and mf["checked"] and mf["dt_s"] == DT and mf["elements"] == ELEMENTS
     refit = fit(other, rec, {"alpha": float(res.estimates[0]), "beta": 0.0}, free=("alpha",), noise=sigma)
     assert abs(refit.estimates[0] - 0.02) <= 3 * refit.stderr[0]
     actual = refit.estimates[0] - res.estimates[0]

@@ -131,7 +131,11 @@ def strain_measure_check(problem: Problem, result, data: Measurements, discretiz
     other = other_measures(problem)
     if problem.recipe is None or not other:
         return None
-    chk = _shift(problem.reformulated(other), result, data, "model-form check's (strain measures exchanged)")
+    try:
+        reformulated = problem.reformulated(other)
+    except ModelError as e:  # a scenario whose other measures cannot be built (its laws, its checks)
+        return dict(exchanged=other, checked=False, notes=[], summary=f"not checked: {e}")
+    chk = _shift(reformulated, result, data, "model-form check's (strain measures exchanged)")
     free = [k for k, n in enumerate(result.names) if n in result.free]
     total = {}
     for k in free:
@@ -151,7 +155,7 @@ def strain_measure_check(problem: Problem, result, data: Measurements, discretiz
         f"structure's strain measure is known, quote the combined uncertainty "
         + ", ".join(f"{n} ± {u:.2g}" for n, u in total.items()) + " (Gauss–Newton SE, discretization and "
         "strain-measure shifts in quadrature) rather than the SE alone"]
-    return dict(exchanged=other, limit_se=limit, within_limit=ok, total_stderr=total, summary=summary,
+    return dict(exchanged=other, checked=True, limit_se=limit, within_limit=ok, total_stderr=total, summary=summary,
                 notes=notes, **chk)
 
 
