@@ -4,7 +4,7 @@ Every fit here uses one problem — M1 with 3 elements, 1 s, generalized-α at h
 samples at 500 Hz — so that two compiled programs serve all tests: residuals with the
 forward-mode Jacobian of (α, β) for one member (fit, gradient, synthetic data, and the
 CLI, which builds the same problem in-process), and the same under ``vmap`` for batches
-of four members (initial guesses, noise seeds). 3 elements instead of 6 keep M1's
+of two members (initial guesses, noise seeds). 3 elements instead of 6 keep M1's
 physics (the same wire, tip body, release under gravity and large swing) at a lower
 cost per evaluation; the synthetic data come from the same discretisation, so noise-free
 recovery is exact. Over 1 s at 500 Hz α is only marginally determined by 1 mm of noise
@@ -29,7 +29,10 @@ from .json_units import assert_unit_keys
 
 TRUTH = {"alpha": 0.02, "beta": 0.0}
 ELEMENTS, T_END, DT, RATE, SIGMA = 3, 1.0, 2e-3, 500.0, 1e-3
-SEEDS = (0, 1, 2, 3)
+#: the batched tests' members: two, one vmapped program of two members for both tests (on
+#: the CPU a batch costs its slowest member's iterations for every member; the spread
+#: over 20 seeds is test_coverage_on_foreign_data_seeds)
+SEEDS = (0, 1)
 CLI_PROBLEM = ["--elements", str(ELEMENTS), "--t-end", str(T_END), "--dt", str(DT)]
 
 
@@ -120,8 +123,9 @@ def test_optax_adam_descends_on_log_alpha(problem, clean):
 
 @pytest.mark.slow  # compiles the vmapped program (the file's second compilation)
 def test_noise_free_recovery_batched_initial_guesses(problem, clean):
-    """Initial guesses from 0.005 to 0.08 under one vmap: all recover alpha to 1e-4."""
-    inits = [{"alpha": a, "beta": 1e-5} for a in (0.005, 0.01, 0.04, 0.08)]
+    """Initial guesses at both ends of 0.005 to 0.08 (a quarter and four times the
+    truth) under one vmap: both recover alpha to 1e-4."""
+    inits = [{"alpha": a, "beta": 1e-5} for a in (0.005, 0.08)]
     results = fit_batch(problem, [clean], inits)
     for r, i in zip(results, inits):
         assert r.converged, r.stop_reason
@@ -131,14 +135,14 @@ def test_noise_free_recovery_batched_initial_guesses(problem, clean):
 
 @pytest.mark.slow  # compiles the vmapped program (the file's second compilation)
 def test_noisy_alpha_within_three_standard_errors_batched_seeds(problem, clean):
-    """1 mm noise, four seeds as one vmapped batch of data sets, beta fixed at its true
+    """1 mm noise, two seeds as one vmapped batch of data sets, beta fixed at its true
     0: alpha within 3 of its standard errors in every seed; the standard errors agree
     across seeds (they depend on the data only through the residual RMS, which
-    estimates the noise: 501 samples, 3 % sampling error) and with the scatter of the
-    estimates (loosely: 4 seeds; the 20-seed study is benchmarks/identification_study.py)."""
+    estimates the noise: 501 samples, 3 % sampling error). The agreement of the SE with
+    the scatter over seeds is test_coverage_on_foreign_data_seeds (20 seeds) and
+    benchmarks/identification_study.py."""
     sets = [_noisy(clean, s) for s in SEEDS]
     results = fit_batch(problem, sets, [{"alpha": 0.01, "beta": 0.0}], free=("alpha",))
-    est = np.array([r.estimates[0] for r in results])
     se = np.array([r.stderr[0] for r in results])
     for r in results:
         assert r.converged and r.status[1] == FIXED, r.stop_reason
@@ -146,8 +150,6 @@ def test_noisy_alpha_within_three_standard_errors_batched_seeds(problem, clean):
         assert abs(r.residual_rms / SIGMA - 1) < 0.1
     assert np.max(se) / np.min(se) < 1.2
     assert 0.01 < np.mean(se) < 0.04  # measured 0.023 1/s: alpha is marginal over 1 s
-    z = (est - 0.02) / se
-    assert np.sqrt(np.mean(z ** 2)) < 2.5
 
 
 @pytest.mark.slow  # one program more: the 1 ms run that makes the data and serves the check
