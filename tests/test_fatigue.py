@@ -322,7 +322,8 @@ def cli_study(tmp_path_factory):
     every 2 ms, points at the clamp and at s = 0.2 m), run once for the two tests below,
     with the arguments and the StudyResult of the API's ``fatigue.study`` that the command
     calls (recorded by a wrapper): the vmapped study with its forward-mode derivative is
-    the longest program of this module to trace (~7 s), so it is traced once."""
+    the longest program of this module to trace (a new trace at every call of ``study``),
+    so it is traced once for both."""
     import ancf_jax.fatigue
     calls = []
     api = ancf_jax.fatigue.study
