@@ -6,7 +6,6 @@ differences, and the command line end to end on a 2-element M1."""
 
 import csv
 import dataclasses
-import json
 import math
 
 import equinox as eqx
@@ -278,10 +277,11 @@ def test_dirlik_gradient_wrt_section_through_beam_stresses(bent_history):
 # ----------------------------------------------------------------------------- command line
 def test_cli_fatigue_end_to_end(tmp_path, capsys):
     """`ancf-jax fatigue m1 --elements 2` over 0.2 s: the files, their columns and keys,
-    the hot spot is the largest damage of the CSV, life = 1/damage."""
+    the hot spot is the largest damage of the CSV, life = 1/damage. (Outputs every 2 ms:
+    the run of the study's host path below, one compiled program for both.)"""
     out = tmp_path / "f"
     rc = main(["fatigue", "m1", "--elements", "2", "--t-end", "0.2", "--out", str(out), "--no-progress",
-               "--set", "fatigue.hours_per_run=0.001"])
+               "--set", "fatigue.hours_per_run=0.001", "--set", "outputs.dt=0.002"])
     assert rc == 0, capsys.readouterr().err
     with open(out / "damage.csv") as fh:
         rows = list(csv.reader(fh))
@@ -316,29 +316,63 @@ def test_cli_fatigue_bad_input_exits_2_before_compiling(tmp_path, capsys):
 
 
 # ----------------------------------------------------------------------------- studies
-def test_study_of_damage_against_damping_with_its_derivative_through_the_run():
-    """fatigue.study: M1 (2 elements, 0-0.2 s), Dirlik damage at the clamp and at
-    s = 0.2 m for three values of the Rayleigh alpha in one vmapped program, with
-    d(damage)/d(alpha) by forward mode through the simulated run (implicit
-    differentiation of every Newton solve). Checked against (1) central differences of
-    the study's own outer members, and (2) the host path for the middle member, an
-    independent code path (simulate -> Results -> analyse with method "dirlik")."""
-    from ancf_jax.models.m1 import m1_model
+@pytest.fixture(scope="module")
+def cli_study(tmp_path_factory):
+    """`ancf-jax fatigue m1 --study alpha=0.499,0.5,0.501` (2 elements, 0-0.2 s, outputs
+    every 2 ms, points at the clamp and at s = 0.2 m), run once for the two tests below,
+    with the arguments and the StudyResult of the API's ``fatigue.study`` that the command
+    calls (recorded by a wrapper): the vmapped study with its forward-mode derivative is
+    the longest program of this module to trace (a new trace at every call of ``study``),
+    so it is traced once for both."""
+    import ancf_jax.fatigue
+    calls = []
+    api = ancf_jax.fatigue.study
+
+    def recording(system, state, parameters, values, settings, **kw):
+        res = api(system, state, parameters, values, settings, **kw)
+        calls.append(dict(system=system, state=state, settings=settings, kw=kw, result=res))
+        return res
+
+    out = tmp_path_factory.mktemp("study") / "s"
+    ancf_jax.fatigue.study = recording
+    try:
+        rc = main(["fatigue", "m1", "--elements", "2", "--t-end", "0.2", "--out", str(out), "--study",
+                   "alpha=0.499,0.5,0.501", "--set", "outputs.dt=0.002",
+                   "--set", 'fatigue.points.a={beam="beam", s=0.0}', "--set", 'fatigue.points.b={beam="beam", s=0.2}'])
+    finally:
+        ancf_jax.fatigue.study = api
+    assert len(calls) == 1
+    return rc, out, calls[0]
+
+
+def test_study_of_damage_against_damping_with_its_derivative_through_the_run(cli_study):
+    """fatigue.study (as ``ancf-jax fatigue --study`` calls it): M1 (2 elements, 0-0.2 s),
+    Dirlik damage at the clamp and at s = 0.2 m for three values of the Rayleigh alpha in
+    one vmapped program, with d(damage)/d(alpha) by forward mode through the simulated run
+    (implicit differentiation of every Newton solve). Checked against (1) central
+    differences of the study's own outer members, and (2) the host path for the middle
+    member, an independent code path (simulate -> Results -> analyse with method "dirlik")."""
     from ancf_jax.simulation import simulate
 
-    st = F.FatigueSettings(F.SNCurve.eurocode(160 * MPA), method="dirlik", at=(("beam", 0.0), ("beam", 0.2)))
+    _, _, call = cli_study
+    res, kw = call["result"], call["kw"]
     a0, da = 0.5, 1e-3
-    system, state = m1_model(2, alpha=a0).build()
-    run = dict(t_end=0.2, dt=1e-3, output_dt=2e-3)
-    res = F.study(system, state, "alpha", [a0 - da, a0, a0 + da], st, **run)
+    np.testing.assert_array_equal(res.values[:, 0], [a0 - da, a0, a0 + da])
+    assert kw["t_end"] == 0.2 and kw["dt"] == 1e-3 and kw["output_dt"] == 0.002
+    assert float(call["system"].beams[0].mesh.n_elements) == 2
     assert res.names == ("alpha",) and res.damage.shape == (3, 2) and res.jacobian.shape == (3, 2, 1)
+    np.testing.assert_allclose(res.s, [0.0, 0.2])
     assert (res.status == 0).all() and (res.damage > 0).all()
     assert res.hot_spot[1] == dict(beam="beam", s_m=0.0)        # the clamp
     fd = (res.damage[2] - res.damage[0]) / (2 * da)
     assert np.all(np.abs(fd) > 1e-3 * res.damage[1])            # alpha matters
     np.testing.assert_allclose(res.jacobian[1, :, 0], fd, rtol=1e-5)
     np.testing.assert_allclose(res.max_damage_gradient()[1], res.jacobian[1, 0])
-    host = F.analyse(simulate(system, state, **run, progress=False), st)
+    # the host path: the run of the middle member (alpha = 0.5), rainflow's settings with Dirlik
+    system = eqx.tree_at(lambda s: s.beams[0].alpha, call["system"], jnp.asarray(a0))
+    st = dataclasses.replace(call["settings"], method="dirlik")
+    run = {k: kw[k] for k in ("t_end", "dt", "output_dt", "solver")}
+    host = F.analyse(simulate(system, call["state"], **run, progress=False), st)
     np.testing.assert_allclose(res.damage[1], host.damage, rtol=1e-9)
 
 
@@ -356,21 +390,17 @@ def test_study_refuses_bad_values_before_compiling():
         F.study(system, state, "alpha", [1.0], dataclasses.replace(st, t_start=1.0), t_end=0.1, dt=1e-3)
 
 
-def test_cli_fatigue_study_writes_one_row_per_value(tmp_path, capsys):
+def test_cli_fatigue_study_writes_one_row_per_value(tmp_path, capsys, cli_study):
     """`ancf-jax fatigue m1 --study alpha=...`: study.csv has the members in order,
-    their max damage, hot spot and derivative, and agrees with the API's study (the
-    same program, from the persistent cache); bad values exit 2 before compiling."""
+    their max damage, hot spot and derivative, and agrees with the API's study it ran
+    (the fixture above); bad values exit 2 before compiling."""
     out = tmp_path / "s"
     assert main(["fatigue", "m1", "--study", "alpha=oops", "--out", str(out)]) == 2
     assert main(["fatigue", "m1", "--study", "alpha=1,2", "--study", "beta=1e-5", "--out", str(out)]) == 2
     assert main(["fatigue", "m1", "--study", "gamma=1,2", "--out", str(out)]) == 2
     assert not out.exists()
-    capsys.readouterr()
-    # the members, points and run of the API test above: the same program (persistent cache)
-    rc = main(["fatigue", "m1", "--elements", "2", "--t-end", "0.2", "--out", str(out), "--study",
-               "alpha=0.499,0.5,0.501", "--set", "outputs.dt=0.002",
-               "--set", 'fatigue.points.a={beam="beam", s=0.0}', "--set", 'fatigue.points.b={beam="beam", s=0.2}'])
-    assert rc == 0, capsys.readouterr().err
+    rc, out, call = cli_study
+    assert rc == 0
     with open(out / "study.csv") as fh:
         rows = list(csv.DictReader(fh))
     assert [float(r["alpha"]) for r in rows] == [0.499, 0.5, 0.501]
@@ -378,6 +408,9 @@ def test_cli_fatigue_study_writes_one_row_per_value(tmp_path, capsys):
     d = np.array([float(r["max_damage"]) for r in rows])
     g = np.array([float(r["d_max_damage_d_alpha"]) for r in rows])
     assert d[2] < d[0] and (g < 0).all()                    # more damping, less damage
+    res = call["result"]
+    np.testing.assert_allclose(d, res.max_damage, rtol=1e-15)
+    np.testing.assert_allclose(g, res.max_damage_gradient()[:, 0], rtol=1e-15)
     info = assert_unit_keys(out / "study.json")
     assert info["parameters"] == ["alpha"] and info["method"] == "dirlik"
     assert info["hot_spot"][1] == dict(beam="beam", s_m=0.0) and info["points"]["s_m"] == [0.0, 0.2]

@@ -237,16 +237,18 @@ def test_time_grid_never_shortens_the_step_asked_for():
 
 # ---------------------------------------------------------------------------- simulate_each
 def test_simulate_each_equals_single_runs_and_reports_failures():
-    """Members in two threads give exactly their single runs (two structures: 2 and 3
-    elements, two damping values); a member made to fail (α = NaN: a NaN state) is named
-    in the SimulationError after every member ran, or returned with its status."""
+    """Members in two threads give exactly their single runs (two structures: H1 and
+    the rigid pendulum, and H1 with two damping values; RK4 stepping every 1 ms, so
+    both are the programs of the period and divergence tests above, compiled once); a
+    member made to fail (α = NaN: a NaN state) is named in the SimulationError after
+    every member ran, or returned with its status."""
     from ancf_jax import ModelError
     from ancf_jax.simulation import simulate_each
 
-    a, b = m1_model(2).build(), m1_model(3).build()
+    a, b = h1_model(4).build(), pendulum_model(1.0, mass=MASS, inertia=INERTIA, arm=ARM).build()
     damped = (eqx.tree_at(lambda s: s.beams[0].alpha, a[0], jnp.asarray(0.5)), a[1])
     members = [a, b, damped]
-    kw = dict(t_end=0.03, dt=1e-3, progress=False)
+    kw = dict(t_end=0.03, dt=1e-3, solver="rk4", progress=False)
     runs = simulate_each([m[0] for m in members], [m[1] for m in members], workers=2, **kw)
     for (system, state), r in zip(members, runs):
         single = simulate(system, state, **kw)
