@@ -513,29 +513,31 @@ def test_friction_reversals_are_located():
 
 # ---------------------------------------------------------------------- eyelets, capstan
 def test_cable_through_frictional_eyelets():
-    """A cable drawn through n = 1 and 2 frictional point eyelets turning it by π/2
-    (benchmarks/eyelets.py): the steady hold/load ratio matches the elastic rod's
-    point-eyelet closed form at the measured turn (measured 2e-5 and 6.6e-5 relative,
-    with 8 ℓ legs 2e-5 and 5e-5; mesh ℓ/4 against ℓ/8: 1.4e-4), not the string's
-    bisector formula (14 % and 3 %
-    off), and approaches the capstan value e^(μθ) as n grows (3.6 % off at n = 1,
-    0.9 % at n = 2; 0.2 % and 0.01 % at n = 4 and 16 in the benchmark). At one eyelet
-    the tension jump is the friction μN (steady sliding's energy balance)."""
-    from benchmarks.eyelets import MU as MU_EYELET, T_LOAD, eyelet_run
+    """A cable drawn through n = 2 frictional point eyelets turning it by π/2 in all
+    (benchmarks/eyelets.py, which runs n = 1, 4 and 16): the steady hold/load ratio
+    matches the elastic rod's point-eyelet closed form at the measured turn (measured
+    1.1e-4 relative), not the string's bisector formula
+    (3.0 % off), and lies 0.93 % below the capstan value e^(μθ), 3.8 times closer than
+    one eyelet's rod closed form at the same turn (3.5 % below; the benchmark: 0.2 %
+    and 0.01 % at n = 4 and 16): the capstan is approached as the eyelets multiply.
+    Each eyelet's friction is μN, and the tension rises by their sum (steady sliding's
+    energy balance; measured 5e-6 relative). One eyelet count only: each count is
+    another model, with four programs of its own to compile (the statics held and
+    released, the run's start and its chunk)."""
+    from benchmarks.eyelets import MU as MU_EYELET, T_LOAD, eyelet_run, rod_eyelet_ratio
 
     # legs of 6 ℓ, 0.25 s averaged over the last 0.08 s (the benchmark: 8 ℓ, 0.3 s, 0.1 s)
-    runs = {n: eyelet_run(n, legs=6.0, t_end=0.25, window=0.08) for n in (1, 2)}
-    for n, r in runs.items():
-        assert r["ratio"] == pytest.approx(r["rod"], rel=1e-3), r
-        assert r["spread"] < 0.02, r  # the axial ringing around the steady state
-        # the eyelet's s decreases (the cable runs towards the drawn end): F = +μN on it
-        np.testing.assert_allclose(r["friction"], MU_EYELET * np.asarray(r["normal"]), rtol=1e-6)
-    one = runs[1]
-    assert abs(one["ratio"] - one["string"]) > 0.1
-    assert (one["ratio"] - 1.0) * T_LOAD == pytest.approx(one["friction"][0], rel=2e-3)
-    assert all(abs(r["ratio"] - r["string"]) > 20 * abs(r["ratio"] - r["rod"]) for r in runs.values())
-    gaps = [abs(runs[n]["ratio"] - runs[n]["capstan"]) for n in (1, 2)]
-    assert gaps[1] < gaps[0] / 3.0, gaps
+    r = eyelet_run(2, legs=6.0, t_end=0.25, window=0.08)
+    assert r["ratio"] == pytest.approx(r["rod"], rel=1e-3), r
+    assert r["spread"] < 0.02, r  # the axial ringing around the steady state
+    # each eyelet's s decreases (the cable runs towards the drawn end): F = +μN on it
+    np.testing.assert_allclose(r["friction"], MU_EYELET * np.asarray(r["normal"]), rtol=1e-6)
+    # steady sliding: the tension jumps by μN at each eyelet
+    assert (r["ratio"] - 1.0) * T_LOAD == pytest.approx(sum(r["friction"]), rel=1e-4), r
+    assert abs(r["ratio"] - r["string"]) > 0.02, r
+    assert abs(r["ratio"] - r["string"]) > 20 * abs(r["ratio"] - r["rod"]), r
+    # towards the capstan: closer than one eyelet turning the cable as much
+    assert abs(r["ratio"] - r["capstan"]) < abs(rod_eyelet_ratio(r["turn"]) - r["capstan"]) / 3.0, r
 
 
 def test_newton_matrix_holds_the_friction_linearization(incline_runs):
