@@ -21,11 +21,11 @@ if __import__("importlib").util.find_spec("jupytext") is None:  # found, not imp
     pytest.skip("needs the test extra (jupytext)", allow_module_level=True)
 nbformat = pytest.importorskip("nbformat", reason="needs the test extra (nbformat)")
 
-#: prints the cells of a paired script, as jupytext reads it, as JSON
+#: prints the cells of the paired scripts, as jupytext reads them, as JSON {path: cells}
 _SCRIPT_CELLS = """
 import json, sys
 import jupytext
-print(json.dumps([[c.cell_type, c.source.strip()] for c in jupytext.read(sys.argv[1]).cells]))
+print(json.dumps({p: [[c.cell_type, c.source.strip()] for c in jupytext.read(p).cells] for p in sys.argv[1:]}))
 """
 
 
@@ -46,14 +46,21 @@ def test_every_notebook_has_a_script_and_a_notebook():
     assert stems == set(IDS), f"unpaired: {sorted(stems ^ set(IDS))} (run jupytext --sync notebooks/*.py)"
 
 
-@pytest.mark.parametrize("script", SCRIPTS, ids=IDS)
-def test_notebook_matches_its_script(script):
-    """The .ipynb has the cells of the .py, in order (run ``jupytext --sync`` after editing)."""
+@pytest.fixture(scope="module")
+def script_cells():
+    """{script path: its cells as jupytext reads them}: every script in one child
+    interpreter (jupytext's imports cost more than reading six scripts)."""
     import json
-    proc = _child(_SCRIPT_CELLS, script, timeout=120)
+    proc = _child(_SCRIPT_CELLS, *SCRIPTS, timeout=120)
     assert proc.returncode == 0, proc.stderr[-3000:]
+    return json.loads(proc.stdout)
+
+
+@pytest.mark.parametrize("script", SCRIPTS, ids=IDS)
+def test_notebook_matches_its_script(script, script_cells):
+    """The .ipynb has the cells of the .py, in order (run ``jupytext --sync`` after editing)."""
     ipynb = nbformat.read(script.with_suffix(".ipynb"), as_version=4)
-    assert _cells(ipynb) == json.loads(proc.stdout), \
+    assert _cells(ipynb) == script_cells[str(script)], \
         f"{script.name} and its .ipynb differ: run jupytext --sync {script}"
     assert all(not c.get("outputs") for c in ipynb.cells if c.cell_type == "code"), \
         f"{script.with_suffix('.ipynb').name} is committed with outputs; clear them"
