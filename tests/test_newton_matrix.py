@@ -365,17 +365,18 @@ def test_user_spring_converges_as_fast_as_a_built_in_one():
 SET_NODES, SET_DAMPING = (1, 3, 4, 6), (2.0, 1.0, 0.5, 3.0)
 
 
-def wires_with_sets(beta=1e-4, as_set=True):
-    """two_wires' droppers (at nodes, tension-only) and support spring as vectorized
-    sets (:class:`~ancf_jax.forces.NodeSpringSet`), or (``as_set=False``) as separate
-    elements: (system, state)."""
+def wires_with_sets(beta=1e-4, as_set=True, support=True):
+    """two_wires' droppers (at nodes, tension-only) and support spring (``support``) as
+    vectorized sets (:class:`~ancf_jax.forces.NodeSpringSet`), or (``as_set=False``) as
+    separate elements: (system, state)."""
     from ancf_jax.model import ground, node
     m = pinned_wires(beta)
     ends = {f"d{i}": (node("contact", n), node("messenger", n)) for i, n in enumerate(SET_NODES)}
     if as_set:
         m.spring_damper_set("droppers", ends, stiffness=1e3, damping=SET_DAMPING, rest_length=0.99, acts="tension")
-        m.spring_damper_set("supports", {"s": (ground(2.0, 1.5), node("messenger", 4))}, stiffness=1e3,
-                            rest_length=0.5)
+        if support:
+            m.spring_damper_set("supports", {"s": (ground(2.0, 1.5), node("messenger", 4))}, stiffness=1e3,
+                                rest_length=0.5)
     else:
         for (name, (a, b)), c in zip(ends.items(), SET_DAMPING):
             m.spring_damper(name, a, b, stiffness=1e3, damping=c, rest_length=0.99, acts="tension")
@@ -410,19 +411,21 @@ def test_a_spring_set_is_its_members():
 
 def test_the_interleaved_solver_runs_under_grad():
     """The multi-beam solver (two wires in an interleaved chain with a set of
-    tension-only droppers, the sets of :func:`wires_with_sets`) under jax.grad, as the
+    tension-only droppers, the set of :func:`wires_with_sets`) under jax.grad, as the
     chain solver: the derivative of the contact wire's height at 2 m after 50 steps
     with respect to one dropper's stiffness against central finite differences of the
-    same runs at a relative step of 1e-3 (agreement to 4e-7 measured on two_wires; at
-    1e-2 the truncation error is 1.4 %, so the bound 1e-5 tells a wrong derivative
-    apart). Its vmap against single runs: the speed batch of the catenary, an
-    interleaved chain with droppers (tests/test_catenary.py). Rayleigh β left out
-    and the droppers as one set: a smaller program to compile."""
+    same runs at a relative step of 1e-3 (agreement to 1.0e-7 measured: the
+    differences' truncation error, 1.0e-5 at a step of 1e-2, second order; the bound
+    1e-5 tells a wrong derivative apart). Its vmap against single runs: the speed
+    batch of the catenary, an interleaved chain with droppers
+    (tests/test_catenary.py). Rayleigh β and the support spring (a force on one beam,
+    3 s of compilation) left out and the droppers as one set: a smaller program to
+    compile."""
     from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
     from ancf_jax.linalg import InterleavedChain
     from ancf_jax.simulation import trajectory
-    system, state = wires_with_sets(beta=0.0)
-    assert isinstance(system.layout, InterleavedChain) and system.banded_forces == (0, 1)
+    system, state = wires_with_sets(beta=0.0, support=False)
+    assert isinstance(system.layout, InterleavedChain) and system.banded_forces == (0,)
     solver = GeneralizedAlpha()
 
     def run(k):
