@@ -6,11 +6,13 @@ independent reference here is a dense ``jax.jacfwd`` of the generalized-α resid
 the whole system along the correction Δq (q̈ = q̈⁰ + β' Δq, v = v⁰ + γ' Δq), at a
 perturbed, moving, stressed state: both must agree to rounding for
 
-* M1 (clamp, fixed joint, tip body) with Rayleigh β ≠ 0 (the ∂(βKv)/∂q term),
+* M1 (clamp, fixed joint, tip body) with Rayleigh β ≠ 0 (the ∂(βKv)/∂q term; β
+  given at construction or set after the build) and a user-written nonlinear spring
+  (a pure potential, no Jacobian) between a beam point and the ground, a built-in
+  spring-damper between two beam points in different elements, and a point force on
+  the tip body,
 * M2 (sliding joint, revolute, two bodies),
-* M1 with a user-written nonlinear spring (a pure potential, no Jacobian) between a
-  beam point and the ground, a built-in spring-damper between two beam points in
-  different elements, and a point force on the tip body.
+* two wires in an interleaved chain joined by droppers (force elements between beams).
 
 Then the point of it: with the user's spring in the matrix, Newton takes as few
 iterations per step as with a built-in spring, where the old matrix (force elements
@@ -101,14 +103,17 @@ effective_dense = eqx.filter_jit(lambda a: a.effective_dense())
 constraint_jacobian = eqx.filter_jit(lambda system, q, t: system.constraint_jacobian(q, t))
 
 
-def spring_system(k=2.0e3, k3=1.0e7, extra=True):
-    system, state = m1(beta=2e-4)
+def spring_system(beta_after_build=False):
+    """M1 with Rayleigh β = 2e-4 s (at construction, or set after a build with β = 0:
+    :func:`beta_set_after_build`), a user-written hardening spring, a built-in
+    spring-damper between two beam points in different elements and a point force on
+    the tip body."""
+    system, state = beta_set_after_build() if beta_after_build else m1(beta=2e-4)
     f = [CubicSpring("user_spring", BeamPoint(0, jnp.asarray(0.25)), GroundPoint(jnp.array([0.25, -0.05])),
-                     k, k3, 0.04)]
-    if extra:
-        f += [SpringDamper("sd", BeamPoint(0, jnp.asarray(0.03)), BeamPoint(0, jnp.asarray(0.33)),
-                           jnp.asarray(500.0), jnp.asarray(2.0), jnp.asarray(0.29)),
-              PointForce("push", BodyPoint(0, jnp.array([0.01, 0.0])), jnp.array([0.3, -0.2]))]
+                     2.0e3, 1.0e7, 0.04),
+         SpringDamper("sd", BeamPoint(0, jnp.asarray(0.03)), BeamPoint(0, jnp.asarray(0.33)),
+                      jnp.asarray(500.0), jnp.asarray(2.0), jnp.asarray(0.29)),
+         PointForce("push", BodyPoint(0, jnp.array([0.01, 0.0])), jnp.array([0.3, -0.2]))]
     return with_forces(system, *f), state
 
 
@@ -210,8 +215,10 @@ def m2_released():
     return m2_model(12, hold=False).build(assemble=False)
 
 
-@pytest.mark.parametrize("case", ["m1_beta", "m1_beta_set", "m2", "m1_forces", "two_wires"])
+@pytest.mark.parametrize("case", ["m1_forces", "m1_beta_set", "m2", "two_wires"])
 def test_iteration_matrix_is_the_jacobian_of_the_residual(case, request):
+    """The cases of the module docstring; M1's β term is checked with its forces (β at
+    construction, and β set after the build: one program)."""
     if case == "two_wires":
         from ancf_jax.linalg import InterleavedChain
         system, state = request.getfixturevalue("wires")
@@ -219,12 +226,9 @@ def test_iteration_matrix_is_the_jacobian_of_the_residual(case, request):
     elif case == "m2":
         system, state = m2_released()
         assert system.n_sliding == 1
-    elif case == "m1_beta":
-        system, state = m1(beta=2e-4)
-    elif case == "m1_beta_set":
-        system, state = beta_set_after_build()
     else:
-        system, state = spring_system()
+        system, state = spring_system(beta_after_build=case == "m1_beta_set")
+        assert system.beams[0].rate_stiffness
     q, v, lam = perturbed(system, state, 0)
     assert_matrix_is_the_jacobian(system, q, v, lam, 0.1)
 
@@ -349,18 +353,27 @@ def test_user_spring_converges_as_fast_as_a_built_in_one():
     built-in :class:`~ancf_jax.forces.SpringDamper` of the same k and rest length
     (measured 4.15 and 4.15 per step over the first 20 steps). Negative control: the same
     law with its tangent left out of the matrix (the solver before issue 16) contracts
-    at ~k/(k + β'm) per iteration (measured 228 per step). The user's spring runs in
-    :class:`WithoutTangent` with ``keep`` = 1, the control with 0: one program."""
+    at ~k/(k + β'm) per iteration (measured 228 per step). One system holds both
+    springs, the user's in :class:`WithoutTangent`; each run switches one on by data
+    (the other's stiffness zero: no force, no tangent) and ``keep`` hides the user's
+    tangent or not: the three runs are one program."""
     base, state = m1()
     point, anchor = BeamPoint(0, jnp.asarray(0.25)), GroundPoint(jnp.array([0.25, -0.05]))
-    spring = CubicSpring("user_spring", point, anchor, 2.0e4, 1.0e10, 0.05)
+    spring = CubicSpring("user_spring", point, anchor, jnp.asarray(2.0e4), jnp.asarray(1.0e10), 0.05)
     built_in = SpringDamper("spring", point, anchor, jnp.asarray(2.0e4), jnp.asarray(0.0), jnp.asarray(0.05))
-    user, left_out = (with_forces(base, WithoutTangent("user_spring", spring, jnp.asarray(keep)))
-                      for keep in (1.0, 0.0))
-    n_user = iterations_per_step(user, state)
-    n_built_in = iterations_per_step(with_forces(base, built_in), state)
+    both = with_forces(base, WithoutTangent("user_spring", spring, jnp.asarray(1.0)), built_in)
+
+    def iterations(user, keep=1.0):
+        """Newton iterations per step with the user's spring (``user``) or the built-in one."""
+        on = jnp.asarray(float(user)), jnp.asarray(float(not user))
+        system = eqx.tree_at(lambda s: (s.forces[-2].keep, s.forces[-2].inner.k, s.forces[-2].inner.k3,
+                                        s.forces[-1].stiffness),
+                             both, (jnp.asarray(keep), 2.0e4 * on[0], 1.0e10 * on[0], 2.0e4 * on[1]))
+        return iterations_per_step(system, state)
+
+    n_user, n_built_in = iterations(user=True), iterations(user=False)
     assert n_user <= n_built_in + 0.05, (n_user, n_built_in)
-    n_left_out = iterations_per_step(left_out, state)
+    n_left_out = iterations(user=True, keep=0.0)
     assert n_left_out > 10 * n_user, (n_left_out, n_user)
 
 
