@@ -12,8 +12,10 @@ resistance; the same slide on a taut inclined cable within its kink bound; the N
 matrix with ∂Q/∂λ against a dense jacfwd; gradients through friction (Coulomb and
 viscous) and every drive kind against finite differences and closed forms.
 
-Compiled programs are shared: the rope runs (h is data), the incline runs (tan β is
-data), one three-trolley run, one taut-cable run, one gradient program.
+Compiled programs are shared: the rope runs (h is data), the incline runs and the
+Coulomb oscillator's runs without location (tan β, the spring and h are data), one
+three-trolley run, one taut-cable run, one eyelet model, one gradient program (not
+vmapped).
 """
 
 import functools
