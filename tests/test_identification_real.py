@@ -379,6 +379,15 @@ def joint(plain):
     return problems, records, res
 
 
+def _record_files(records, tmp_path) -> list:
+    """The records as CSV files record1.csv, record2.csv, ... (17 digits)."""
+    from ancf_jax.identification import write_csv
+    paths = [tmp_path / f"record{k + 1}.csv" for k in range(len(records))]
+    for path, d in zip(paths, records):
+        write_csv(path, d.t, d.y, precision=17)
+    return paths
+
+
 def test_joint_fit_of_two_experiments(joint):
     """Two experiments (another load, another noise level) fitted with one α, each
     record weighted by its own 1/σ². Reference: Gauss–Newton information adds over
@@ -417,12 +426,8 @@ def test_cli_joint_fit(joint, tmp_path, capsys):
     record's residual RMS and diagnostics, and, as the check is on by default, say that
     a joint fit has no discretization check."""
     from ancf_jax.cli import main
-    from ancf_jax.identification import write_csv
     problems, records, api = joint
-    paths = []
-    for k, d in enumerate(records):
-        paths.append(tmp_path / f"record{k + 1}.csv")
-        write_csv(paths[-1], d.t, d.y, precision=17)
+    paths = _record_files(records, tmp_path)
     out = tmp_path / "joint"
     assert main(["fit", "m1", "--elements", str(ELEMENTS), "--t-end", str(T_END), "--dt", str(DT), "--joint",
                  "--data", str(paths[0]), "--record-noise", str(JOINT_NOISE[0]),
@@ -461,7 +466,6 @@ def test_joint_fit_with_nuisance_parameters_per_record(problem, tmp_path):
     columns are zero) and vice versa. ``ancf-jax fit --joint --nuisance ...`` on the
     same records as CSV reports the API's estimates under the same names."""
     from ancf_jax.cli import main
-    from ancf_jax.identification import write_csv
     heavy = Problem.from_scenario("m1", ("alpha", "beta"), elements=ELEMENTS, t_end=T_END, dt=DT,
                                   overrides=[HEAVY], nuisance=NUISANCE)
     t = np.arange(451) / RATE
@@ -488,10 +492,7 @@ def test_joint_fit_with_nuisance_parameters_per_record(problem, tmp_path):
     with pytest.raises(ModelError, match=r"unknown parameter\(s\) \['offset'\]"):
         fit_joint((problem, heavy), records, {"offset": 0.0})
 
-    paths = []
-    for k, d in enumerate(records):
-        paths.append(tmp_path / f"record{k + 1}.csv")
-        write_csv(paths[-1], d.t, d.y, precision=17)
+    paths = _record_files(records, tmp_path)
     out = tmp_path / "joint"
     assert main(["fit", "m1", "--elements", str(ELEMENTS), "--t-end", str(T_END), "--dt", str(DT), "--joint",
                  "--data", str(paths[0]), "--data", str(paths[1]), "--record-set", HEAVY,
