@@ -52,6 +52,7 @@ import numpy as np
 from ..errors import ModelError, SimulationError
 from ..validation import check_positive
 from .data import Measurements
+from .joint import base_name
 from .problem import Problem
 from .report import (DETERMINED, FIXED, SIGNIFICANCE, UNDETERMINED, ZERO, FitResult, gauss_newton_statistics,
                      misfit_diagnostics)
@@ -175,7 +176,7 @@ def _fit(problem: Problem, datasets: Sequence[Measurements], p0: np.ndarray, fre
     B = len(p0)
     islog = problem.log_scaled
     # (a joint fit's time offsets are named time_offset@e)
-    bound = np.array([problem.max_time_offset if n.split("@")[0] == "time_offset" else math.inf for n in names])
+    bound = np.array([problem.max_time_offset if base_name(n) == "time_offset" else math.inf for n in names])
     if use_optax and not islog[mask].all():
         raise ModelError("nuisance parameters (time_offset, offset, gain) and parameters at values <= 0 "
                          "are fitted by method 'lm' only (optax steps log p)")

@@ -132,8 +132,7 @@ class JointProblem:
         p = np.zeros(len(self.names))
         # the first record last: its system's values of the physical parameters stand
         for e, (pr, cols) in reversed(list(enumerate(zip(self.problems, self.columns)))):
-            own = {n: values[joint_name(n, e + 1) if i >= self.n_physical else n]
-                   for i, n in enumerate(pr.names) if (joint_name(n, e + 1) if i >= self.n_physical else n) in values}
+            own = {n: values[j] for n, j in zip(pr.names, (self.names[c] for c in cols)) if j in values}
             p[cols] = pr.vector(own)  # each record's checks (ranges, bounds) with its own names
         return p
 

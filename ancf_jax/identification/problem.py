@@ -360,9 +360,13 @@ class Problem:
         if self.elements is None:
             raise ModelError("the mesh of this problem cannot be refined (it was not built from a "
                              "scenario with one beam)")
+        return self._rebuilt(elements=self.elements * mesh, dt=self.dt / step)
+
+    def _rebuilt(self, *, elements, dt, overrides: tuple = ()) -> "Problem":
+        """This problem rebuilt from its scenario with another mesh, step and further overrides."""
         rc = self.recipe
-        return Problem.from_scenario(rc["source"], rc["params"], rc["output"], overrides=rc["overrides"],
-                                     elements=self.elements * mesh, t_end=rc["t_end"], dt=self.dt / step,
+        return Problem.from_scenario(rc["source"], rc["params"], rc["output"], overrides=rc["overrides"] + overrides,
+                                     elements=elements, t_end=rc["t_end"], dt=dt,
                                      solver_options=rc["solver_options"], nuisance=self.nuisance,
                                      max_time_offset=self.max_time_offset)
 
@@ -374,13 +378,9 @@ class Problem:
             raise ModelError("the strain measures of this problem cannot be changed (it was not built from a "
                              "scenario)")
         import json
-        rc = self.recipe
         extra = tuple(f"beams.{b}.formulation.{k}={json.dumps(v)}" for b, f in formulations.items()
                       for k, v in f.items())
-        return Problem.from_scenario(rc["source"], rc["params"], rc["output"], overrides=rc["overrides"] + extra,
-                                     elements=self.elements, t_end=rc["t_end"], dt=self.dt,
-                                     solver_options=rc["solver_options"], nuisance=self.nuisance,
-                                     max_time_offset=self.max_time_offset)
+        return self._rebuilt(elements=self.elements, dt=self.dt, overrides=extra)
 
     # ------------------------------------------------------------------ parameters
     @property
