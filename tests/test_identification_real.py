@@ -767,10 +767,13 @@ def test_strain_rate_damping_and_EA_on_a_strain_gauge(gauge):
     """A strain gauge (M1's bending stress sigma_e1_mid, Pa, 250 Hz over 0.6 s) with
     the strain-rate damping of bending d and EA (through A) as scenario keys. First
     ∂σ/∂A and ∂σ/∂d by forward mode through the probed key maps against central
-    differences of M1 *rebuilt* at A ± δ and d ± δ (δ = 1e-3 of the value). Measured
-    (rebuilds run through the keyed program): 7e-7 of the largest derivative for A with
-    δ and δ/2 alike (the Newton tolerance's noise, not truncation: Richardson does not
-    lower it); tested to 3e-6. Then d and α
+    differences of M1 *rebuilt* at A ± δ and d ± δ (δ = 1e-3 of the value). Measured,
+    relative to the largest derivative: for d 7e-8 (δ) and 2e-8 (δ/2), tested to 3e-6;
+    for A a floor of 0.7e-6 to 3.6e-6 that depends on the machine and the XLA flags and
+    that neither δ (2.5e-4 to 1e-3 of A) nor the Newton tolerance of the references
+    (1e-10 to 1e-13) lowers (differences at two δ differ from each other as much as
+    from the exact value), tested to 1e-5 (CI failed the earlier 3e-6 at 3.35e-6).
+    Then d and α
     recovered to 1e-6 relative (A held) from a noise-free stress record of M1 rebuilt
     with d 1.5 × and α 2 × the start."""
     assert [p.kind for p in gauge.params] == ["key", "key", "alpha"]
@@ -790,7 +793,8 @@ def test_strain_rate_damping_and_EA_on_a_strain_gauge(gauge):
         exact = jac[0][:, k] * np.sqrt(len(GAUGE_T))
         scale = np.max(np.abs(exact))
         assert scale > 0
-        assert np.max(np.abs(fd - exact)) <= 3e-6 * scale, (key, np.max(np.abs(fd - exact)) / scale)
+        floor = 1e-5 if key.endswith(".A") else 3e-6  # the measured floors (docstring)
+        assert np.max(np.abs(fd - exact)) <= floor * scale, (key, np.max(np.abs(fd - exact)) / scale)
     truth = dict(LAW, **{"beams.beam.bending_law.damping": 3e-5, "alpha": 0.04})
     record = Measurements.from_arrays(GAUGE_T, _rebuilt_output("sigma_e1_mid", truth, GAUGE_T), source="gauge")
     res = fit(gauge, record, LAW, free=LAW_KEYS[1:])
