@@ -65,3 +65,33 @@ class _Static:
 
     def __eq__(self, other):
         return isinstance(other, _Static) and self._key == other._key
+
+
+def reached_by(tree, inputs, *, tangents: bool = True):
+    """``tree`` with every leaf marked as depending on every floating-point leaf of
+    ``inputs``: the same values, but JAX sees a batch axis (under ``vmap``) and, with
+    ``tangents``, a tangent (under ``jvp``) in each leaf wherever any input has one.
+
+    For the initial carry of a loop. Differentiating or batching ``scan`` or
+    ``while_loop``, JAX finds which carries have a tangent or a batch axis by a
+    fixpoint, transforming the body again for every carry it promotes, and nested loops
+    multiply the passes: a carry that starts independent of the inputs but depends on
+    them after one iteration (a model's initial q and v, which its damping does not
+    change; the Newton matrix's factors, zeros before the first iteration) costs a
+    pass. Marked, a loop's first pass is its last, with the body JAX's fixpoint would
+    have reached. The mark is ``select(True, x, anchor)``, which XLA folds away: the
+    compiled program computes the same numbers. ``tangents=False`` for what is held
+    constant in derivatives (factors): a batch axis only. Eagerly (no tracer in
+    ``tree`` or ``inputs``), ``tree`` itself."""
+    leaves = [x for x in jax.tree.leaves(inputs) if eqx.is_inexact_array(x)]
+    if not any(isinstance(x, jax.core.Tracer) for x in leaves + jax.tree.leaves(tree)):
+        return tree
+    anchor = sum(jnp.sum(x).astype(float) for x in leaves)
+    if not tangents:
+        anchor = jax.lax.stop_gradient(anchor)
+
+    def mark(x):
+        shape = jnp.shape(x)
+        return jax.lax.select(jnp.ones(shape, bool), x, jnp.broadcast_to(anchor, shape).astype(jnp.result_type(x)))
+
+    return jax.tree.map(mark, tree)

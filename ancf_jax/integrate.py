@@ -54,7 +54,7 @@ from .errors import ModelError
 from .failures import Failure
 from .forces import has_kinks, has_node_crossings, kink_values, node_crossing_values
 from .integrators.base import AbstractIntegrator, Carry, StepInfo, select_carry
-from ._control import run_if
+from ._control import reached_by, run_if, traced_once
 from .joints import SlidingJoint
 from .system import State, System
 from .validation import check_count, check_positive
@@ -423,9 +423,9 @@ def _step_with_retries(system, integrator, carry, h, context, options):
     return out, StepInfo(iters, completed)
 
 
-@eqx.filter_jit
-def _jitted_step(system, integrator, carry, h, context):
-    return integrator.step(system, carry, h, context)
+#: one step, traced once per program (:func:`~ancf_jax._control.traced_once`): the
+#: loops' passes under ``jvp`` and ``vmap`` transform its cached jaxpr
+_step = traced_once(lambda integrator, system, carry, h, context: integrator.step(system, carry, h, context))
 
 
 def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopState, context,
@@ -461,7 +461,7 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
         if options.max_halvings:
             new, info = _step_with_retries(system, integrator, loop.carry, hs, context, options)
         else:
-            new, info = _jitted_step(system, integrator, loop.carry, hs, context)
+            new, info = _step(integrator, system, loop.carry, hs, context)
         new2, extra, crossed = _crossing(system, integrator, loop.carry, new, hs, context, options)
         it = info.iterations
         conv = info.converged
@@ -543,33 +543,11 @@ class Checkpoint(eqx.Module):
 
 
 #: the fields of a :class:`Carry` that a step makes depend on every input of the run
+#: (marked so at the start, :func:`~ancf_jax._control.reached_by`: a loop over steps
+#: traced once under ``jvp`` and ``vmap``; the identification's Jacobian program of M1
+#: traced in 4.6 s instead of 8.6 s). Not time; the solver's memory (factors, held
+#: constant in derivatives) gets a batch axis only.
 _STATE_FIELDS = ("q", "v", "acc", "aux", "lam", "work", "power")
-
-
-def _reached_by_inputs(carry: Carry, inputs) -> Carry:
-    """``carry`` with its state fields (:data:`_STATE_FIELDS`) marked as depending on
-    every floating-point input: the same values, but JAX sees a tangent (and a batch
-    axis) in them wherever any input has one.
-
-    Why: differentiating or batching a loop, JAX finds which carries have a tangent (a
-    batch axis) by a fixpoint, transforming the body again for each carry it promotes.
-    A run's initial q, v and work seldom depend on the parameters (a model at rest
-    whatever its damping) while every later step does, so each nested loop took two
-    passes and the step was transformed 2 × 2 times: marking them at the start makes
-    every loop's first pass its last (the identification's Jacobian program of M1
-    traced in 4.8 s instead of 8.6 s). The mark is ``select(True, x, anchor)``, folded
-    away by XLA: the compiled program computes the same numbers. Time and the
-    solver's memory (factors, held constant in derivatives) are left alone."""
-    leaves = [x for x in jax.tree.leaves(inputs) if eqx.is_inexact_array(x)]
-    if not leaves:
-        return carry
-    anchor = sum(jnp.sum(x).astype(float) for x in leaves)
-
-    def mark(x):
-        return jax.lax.select(jnp.ones(jnp.shape(x), bool), x, jnp.broadcast_to(anchor, jnp.shape(x)).astype(x.dtype))
-
-    return eqx.tree_at(lambda c: [getattr(c, f) for f in _STATE_FIELDS], carry,
-                       [mark(getattr(carry, f)) for f in _STATE_FIELDS])
 
 
 def initial_loop(system: System, integrator: AbstractIntegrator, state: State | Checkpoint,
@@ -581,7 +559,11 @@ def initial_loop(system: System, integrator: AbstractIntegrator, state: State | 
         carry = integrator.resume(system, state.carry, context)
     else:
         carry = integrator.init(system, state, context)
-    carry = _reached_by_inputs(carry, (system, state, context))
+    inputs = (system, state, context)
+    carry = eqx.tree_at(lambda c: [getattr(c, f) for f in _STATE_FIELDS], carry,
+                        reached_by([getattr(carry, f) for f in _STATE_FIELDS], inputs))
+    if carry.memory is not None:
+        carry = eqx.tree_at(lambda c: c.memory, carry, reached_by(carry.memory, inputs, tangents=False))
     # strongly typed scalars, as the loop returns them: a weakly typed ``jnp.asarray(nan)``
     # made a jitted chunk called with the initial loop and then with its own output
     # trace and compile twice (tests/test_integrate.py::test_second_chunk_reuses_the_program)

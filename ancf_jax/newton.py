@@ -38,7 +38,7 @@ import jax
 import jax.extend
 import jax.numpy as jnp
 
-from ._control import run_if
+from ._control import reached_by, run_if
 from .linalg import AbstractSaddleSolver, AutoSaddleSolver
 
 
@@ -204,6 +204,10 @@ class ModifiedNewton(eqx.Module):
                     refresh=refresh0, rn=jnp.array(jnp.nan), back=zero, nf=zero)
         if guarded and self.max_backtracks:
             init.update(x_good=x0, dx=jnp.zeros_like(x0), a=jnp.array(1.0))
+        # batched (under vmap) wherever x0 is from the first pass (_control.reached_by);
+        # the factors, constant in derivatives, get no tangent
+        init = dict(reached_by({k: a for k, a in init.items() if k != "fac"}, x0),
+                    fac=reached_by(init["fac"], x0, tangents=False))
         c = jax.lax.while_loop(cond, body, init)
         if kept:
             return NewtonSolution(c["x"], c["it"], c["done"], c["rn"], c["fac"], c["nf"])
