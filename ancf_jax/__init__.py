@@ -25,11 +25,13 @@ from ._cache import configure_compilation_cache as _configure_compilation_cache 
 _configure_compilation_cache()
 
 from ._version import __version__  # noqa: E402
+from ._xla import compiler_options  # noqa: E402
 from .errors import (ConstraintError, InexactNewtonMatrixWarning, ModelError, SimulationError,  # noqa: E402
                      SimulationInterrupted, StaticsError, VelocityProjectionWarning)
 
 __all__ = [
     "__version__",
+    "compiler_options",
     "ModelError",
     "ConstraintError",
     "StaticsError",

@@ -396,12 +396,18 @@ def _signature(args):
     return treedef, sig
 
 
+def _options_key(options):
+    return tuple(sorted(options.items())) if options else ()
+
+
 def compiled(fn, *args, options=None):
     """AOT-compiled ``fn`` for these arguments, cached in-process by their structure
-    (``options``: XLA compiler options).
+    and the compiler options (``options``: the program's own XLA compiler options, with
+    those of enclosing :func:`ancf_jax.compiler_options` blocks).
 
     Returns (executable, seconds spent compiling now; 0.0 when cached)."""
-    key = (fn, _signature(args))
+    options = _xla.program_options(options)
+    key = (fn, _signature(args), _options_key(options))
     hit = _COMPILED.get(key)
     if hit is not None:
         return hit, 0.0
@@ -411,6 +417,12 @@ def compiled(fn, *args, options=None):
     exe = fn.lower(*args).compile(options)
     _COMPILED[key] = exe
     return exe, time.perf_counter() - t0
+
+
+def is_compiled(fn, *args, options=None) -> bool:
+    """Whether :func:`compiled` holds ``fn`` for these arguments and options now."""
+    options = _xla.program_options(options)
+    return (fn, _signature(args), _options_key(options)) in _COMPILED
 
 
 #: one background thread for XLA compilations (:func:`compiled_pair`); XLA releases the
@@ -449,7 +461,8 @@ def compiled_pair(first, first_args, second, second_args, first_options=None):
 
     Returns (first's executable, second's executable, wall-clock seconds spent
     compiling now; 0.0 when both were cached)."""
-    key = (first, _signature(first_args))
+    first_options = _xla.program_options(first_options)
+    key = (first, _signature(first_args), _options_key(first_options))
     devices = _devices(first_args)
     if key in _COMPILED or len(devices) > 1:
         # only the second may be new, or the arguments are sharded (the outputs'

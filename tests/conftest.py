@@ -38,6 +38,25 @@ def pytest_configure(config):
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 2.0)
 
 
+# A module whose tests run long (fits that run one program dozens of times) declares
+# ``COMPILER_OPTIONS = {...}``: its programs compile with them (ancf_jax.compiler_options),
+# e.g. at XLA's LLVM level 3 instead of the suite's 0 above. Measured per module, one
+# process, fresh caches (2026-12-07, 2 cores): tests/test_identification.py 118 s at
+# level 0, 77 s at 3; across the suite at level 3 instead of 0 (CI's command, per-module
+# worker time): test_identification_real 353 -> 306 s, while the simulation modules
+# got slower (cable machinery 160 -> 202 s, shipped scenarios 113 -> 151 s, Newton matrix
+# 107 -> 141 s: short runs, compile-bound).
+@pytest.fixture(autouse=True, scope="module")
+def _module_compiler_options(request):
+    options = getattr(request.module, "COMPILER_OPTIONS", None)
+    if not options:
+        yield
+        return
+    from ancf_jax import compiler_options
+    with compiler_options(**options):
+        yield
+
+
 # ANCF_JAX_TIMING_LOG=FILE appends "cpu_s wall_s nodeid" per test phase (setup/call/
 # teardown) to FILE as the tests run: CPU seconds of the worker process do not depend on
 # how loaded the machine is, so the suite's cost on CI can be estimated on a busy one.

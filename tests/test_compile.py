@@ -114,3 +114,36 @@ def test_loop_kernels_give_the_default_run_without_lapack_in_the_step():
     assert child["on"] == tested and child["lapack"] == (not tested) and child["status"] == "ok"
     r = simulation.simulate(system, state, t_end=0.02, dt=1e-3, progress=False)
     np.testing.assert_allclose(child["q"], r.q, rtol=0, atol=1e-12)
+
+
+def test_compiler_options_reach_xla_and_key_the_in_process_cache():
+    """``ancf_jax.compiler_options``: a run compiled in the block is another program
+    (compiled again, cached beside the first; the initial state keeps its run-once
+    options and is reused), its numbers equal the first's to rounding (another LLVM
+    level, the same floating-point operations); the options reach XLA (a name XLA does
+    not know fails the compilation with that name); nested blocks add up; a value of the
+    wrong type is refused before anything is compiled."""
+    import pytest
+
+    from ancf_jax import compiler_options
+    from ancf_jax.models.m1 import m1_model
+    system, state = m1_model(3).build()
+    simulation._COMPILED.clear()
+    first = simulation.simulate(system, state, t_end=0.004, dt=1e-3, progress=False)
+    with compiler_options(xla_backend_optimization_level=3):  # the suite compiles at 0 (conftest.py)
+        other = simulation.simulate(system, state, t_end=0.004, dt=1e-3, progress=False)
+        assert other.compile_time_s > 0.0 and len(simulation._COMPILED) == 3
+        with compiler_options(xla_cpu_enable_fast_min_max=False):
+            assert _xla.program_options() == {"xla_backend_optimization_level": 3,
+                                              "xla_cpu_enable_fast_min_max": False}
+            assert _xla.program_options({"xla_backend_optimization_level": 0})["xla_backend_optimization_level"] == 0
+    assert _xla.program_options() is None
+    np.testing.assert_allclose(other.q, first.q, rtol=0, atol=1e-12)
+    again = simulation.simulate(system, state, t_end=0.004, dt=1e-3, progress=False)
+    assert again.compile_time_s == 0.0 and len(simulation._COMPILED) == 3
+    with compiler_options(xla_no_such_option_of_ancf_jax=1), \
+            pytest.raises(Exception, match="xla_no_such_option_of_ancf_jax"):
+        simulation.simulate(system, state, t_end=0.004, dt=1e-3, progress=False)
+    with pytest.raises(ValueError, match="xla_backend_optimization_level must be a bool, int, float or str"):
+        with compiler_options(xla_backend_optimization_level=[3]):
+            pass

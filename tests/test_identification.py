@@ -27,6 +27,9 @@ from ancf_jax.identification.report import DETERMINED, FIXED, ZERO
 
 from .json_units import assert_unit_keys
 
+#: the fits run each program dozens of times: compiled at XLA's LLVM level 3, not the
+#: suite's 0 (tests/conftest.py, measured there)
+COMPILER_OPTIONS = {"xla_backend_optimization_level": 3}
 TRUTH = {"alpha": 0.02, "beta": 0.0}
 ELEMENTS, T_END, DT, RATE, SIGMA = 3, 1.0, 2e-3, 500.0, 1e-3
 #: the batched tests' members: two, one vmapped program of two members for both tests (on

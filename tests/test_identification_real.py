@@ -34,6 +34,9 @@ from ancf_jax.identification.report import DETERMINED, FIXED, ZERO
 
 from .json_units import assert_unit_keys
 
+#: the fits run each program dozens of times: compiled at XLA's LLVM level 3, not the
+#: suite's 0 (tests/conftest.py, measured there)
+COMPILER_OPTIONS = {"xla_backend_optimization_level": 3}
 ELEMENTS, T_END, DT, RATE = 3, 1.0, 2e-3, 500.0
 NUISANCE = ("time_offset", "offset", "gain")
 #: the record: model time = record time + TAU; sensor reads GAIN * y + OFFSET

@@ -5,6 +5,7 @@ diverge. Each notebook is one test, so ``pytest -n 2`` runs two at a time.
 """
 
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -87,6 +88,14 @@ finally:
 """
 
 
+#: notebooks whose kernels compile at XLA's default LLVM level (3), not the suite's 0
+#: (tests/conftest.py): their fits run one program many times. Measured as scripts, quick
+#: mode, fresh caches, one at a time (2026-12-07, 2 cores), level 0 against 3:
+#: 04_identification 79 s against 49 s; the others are faster at 0 or equal (01 16/21 s,
+#: 02 22/27, 03 38/40, 05 38/51, 06 52/52).
+OPTIMIZED = {"04_identification"}
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("script", SCRIPTS, ids=IDS)
 def test_notebook_runs_in_quick_mode(script, tmp_path):
@@ -97,6 +106,8 @@ def test_notebook_runs_in_quick_mode(script, tmp_path):
     if find_spec("nbclient") is None or find_spec("ipykernel") is None:
         pytest.skip("needs the test extra (nbclient, ipykernel)")
     env = dict(os.environ, ANCF_JAX_QUICK="1")
+    if script.stem in OPTIMIZED:
+        env["XLA_FLAGS"] = re.sub(r"--xla_backend_optimization_level=\S+", "", env.get("XLA_FLAGS", "")).strip()
     env.pop("MPLBACKEND", None)  # the kernel's inline backend renders the figures
     # the kernel imports this checkout of ancf_jax, whatever is installed
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])

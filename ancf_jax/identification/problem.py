@@ -525,7 +525,7 @@ class Problem:
 
     def _jacobian_ready(self, p, datasets) -> bool:
         """Whether the Jacobian program for these shapes is compiled in this process."""
-        from ..simulation import _COMPILED, _signature
+        from ..simulation import is_compiled
         p = np.atleast_2d(np.asarray(p, float))
         t, y, w = stack_data(datasets)
         b = max(len(p), len(t))
@@ -537,7 +537,7 @@ class Problem:
             args = self._args(layout, np.broadcast_to(p, (b, p.shape[1])), *(np.broadcast_to(a, (b, a.shape[1]))
                                                                             for a in (t, y, w)))
             fn = _evaluate_jit[1]
-        return (fn, _signature(args)) in _COMPILED
+        return is_compiled(fn, *args)
 
     def loss_and_gradient(self, p, data: Measurements):
         """(loss [m²], ∂loss/∂p) by forward mode (Jacobian of the residuals)."""
