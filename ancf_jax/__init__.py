@@ -9,7 +9,8 @@ make float32 simulations diverge. It also turns on JAX's persistent compilation 
 (``~/.cache/ancf_jax/xla``; ``ANCF_JAX_CACHE=0`` turns it off, see
 :mod:`ancf_jax._cache`), so a model compiled once starts at once in later processes,
 and adds XLA:CPU flags chosen by measurement to ``XLA_FLAGS`` (``ANCF_JAX_XLA_FLAGS=0``
-turns that off, see :mod:`ancf_jax._xla`).
+turns that off, see :mod:`ancf_jax._xla`); :func:`compiler_options` sets XLA compiler
+options for the programs compiled in a ``with`` block.
 """
 
 from ._xla import configure_xla_flags as _configure_xla_flags
