@@ -31,6 +31,7 @@ TARGETS = (
     ("compile_m1", "compile time of M1 [s]", 3.0),
     ("compile_m2", "compile time of the three-mesh M2 batch [s]", 8.0),
     ("scaling", "per-step cost exponent p (cost ∝ n^p), 24 to 384 elements", 1.0),
+    ("suite", "the test suite, README's command, 2-core machine: pytest seconds", 480.0),
 )
 
 
@@ -42,6 +43,8 @@ PROFILE = "step_profile"
 #: written by ``python -m benchmarks.pantograph_catenary`` (issue 21; not by
 #: benchmarks.run); rendered last, with its own targets
 PANTOGRAPH = "pantograph_catenary"
+#: written by ``python -m benchmarks.suite_time`` (not by benchmarks.run); rendered last
+SUITE = "suite_time"
 
 
 
@@ -53,7 +56,7 @@ def _dense(options) -> bool:
 
 def load(results: Path) -> dict:
     out = {}
-    for name in SECTIONS + EXTRA + (PROFILE, PANTOGRAPH):
+    for name in SECTIONS + EXTRA + (PROFILE, PANTOGRAPH, SUITE):
         p = results / f"{name}.json"
         if p.exists():
             out[name] = json.loads(p.read_text())
@@ -184,11 +187,33 @@ def targets(data: dict) -> list:
         detail = f"not run up to 384 elements; {detail}: p = {f(p_fit)}"
         p_fit = None
     rows.append(("scaling", p_fit, detail))
+    rows.append(("suite", *_suite_target(data.get(SUITE))))
     out = []
     for (key, desc, limit), (_, value, detail) in zip(TARGETS, rows):
         met = None if value is None else value <= limit
         out.append((key, desc, limit, value, met, detail))
     return out
+
+
+def _suite_target(d):
+    """(pytest seconds, detail) of the suite's time (suite_time.json)."""
+    if not d:
+        return None, "not run (`python -m benchmarks.suite_time`)"
+    top = ", ".join(f"{m['module'].removeprefix('tests/')} {m['wall_s']:.0f} s" for m in d["modules"][:6])
+    detail = (f"{d['tests']} tests, {d['worker_wall_s']:.0f} s of worker time on 2 workers "
+              f"({d['worker_cpu_s']:.0f} s CPU in the workers; notebooks, the sweep suite and the Exudyn "
+              f"cross-check run in child processes); longest modules: {top} (section below)")
+    if d.get("note"):
+        detail += f"; {d['note']}"
+    return d.get("pytest_s"), detail
+
+
+def sec_suite(d) -> str:
+    from .suite_time import markdown
+    return ("## Test suite time\n\nPer test module (each runs whole in one of the two xdist workers; "
+            "setup, call and teardown of every test summed):\n\n" + markdown(d)
+            + f"\n_Command: `{d.get('command', 'python -m benchmarks.suite_time')}`; "
+            f"{d.get('stamp', {}).get('date', '?')}._\n")
 
 
 def _gpu_batch_target(data):
@@ -850,6 +875,8 @@ def render(results: Path | None = None, out: Path | None = None) -> Path:
             parts += [sec_batch_gpu(data[g], data.get("batch")) + "\n" for g in EXTRA if g in data]
     if PANTOGRAPH in data:
         parts.append(sec_pantograph(data[PANTOGRAPH]) + "\n")
+    if SUITE in data:
+        parts.append(sec_suite(data[SUITE]) + "\n")
     out.write_text("".join(parts))
     return out
 
