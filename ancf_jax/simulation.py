@@ -29,6 +29,7 @@ iterations per step (measurements: ``benchmarks/``).
 from __future__ import annotations
 
 import concurrent.futures
+import contextvars
 import math
 import time
 from typing import Any
@@ -723,7 +724,9 @@ def simulate_each(systems, states, *, workers: int | None = None, on_failure: st
 
     pool = ThreadPoolExecutor(max_workers=min(int(workers), max(len(systems) - 1, 1)))
     try:
-        for f in [pool.submit(member, i) for i in range(1, len(systems))]:
+        # the members' threads run in the caller's context (its compiler_options, if any:
+        # the program compiled by the first member is theirs)
+        for f in [pool.submit(contextvars.copy_context().run, member, i) for i in range(1, len(systems))]:
             f.result()
         if stop:
             raise KeyboardInterrupt

@@ -121,7 +121,8 @@ def test_compiler_options_reach_xla_and_key_the_in_process_cache():
     (compiled again, cached beside the first; the initial state keeps its run-once
     options and is reused), its numbers equal the first's to rounding (another LLVM
     level, the same floating-point operations); the options reach XLA (a name XLA does
-    not know fails the compilation with that name); nested blocks add up; a value of the
+    not know fails the compilation with that name); simulate_each's threads compile
+    nothing new in the block; nested blocks add up; a value of the
     wrong type is refused before anything is compiled."""
     import pytest
 
@@ -129,15 +130,19 @@ def test_compiler_options_reach_xla_and_key_the_in_process_cache():
     from ancf_jax.models.m1 import m1_model
     system, state = m1_model(3).build()
     simulation._COMPILED.clear()
-    first = simulation.simulate(system, state, t_end=0.004, dt=1e-3, progress=False)
     with compiler_options(xla_backend_optimization_level=3):  # the suite compiles at 0 (conftest.py)
         other = simulation.simulate(system, state, t_end=0.004, dt=1e-3, progress=False)
-        assert other.compile_time_s > 0.0 and len(simulation._COMPILED) == 3
+        assert other.compile_time_s > 0.0 and len(simulation._COMPILED) == 2
+        # simulate_each's member threads run in the block's context: its program, cached
+        each = simulation.simulate_each([system] * 3, [state] * 3, workers=2, t_end=0.004, dt=1e-3)
+        assert [r.compile_time_s for r in each] == [0.0] * 3 and len(simulation._COMPILED) == 2
         with compiler_options(xla_cpu_enable_fast_min_max=False):
             assert _xla.program_options() == {"xla_backend_optimization_level": 3,
                                               "xla_cpu_enable_fast_min_max": False}
             assert _xla.program_options({"xla_backend_optimization_level": 0})["xla_backend_optimization_level"] == 0
     assert _xla.program_options() is None
+    first = simulation.simulate(system, state, t_end=0.004, dt=1e-3, progress=False)
+    assert first.compile_time_s > 0.0 and len(simulation._COMPILED) == 3  # the chunk again, the same init
     np.testing.assert_allclose(other.q, first.q, rtol=0, atol=1e-12)
     again = simulation.simulate(system, state, t_end=0.004, dt=1e-3, progress=False)
     assert again.compile_time_s == 0.0 and len(simulation._COMPILED) == 3
