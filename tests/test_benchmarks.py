@@ -294,14 +294,15 @@ def test_report_pantograph_section_from_its_json(tmp_path):
 def test_suite_time_from_a_timing_log(tmp_path, monkeypatch):
     """benchmarks/suite_time.py: per-module sums of a timing log (setup, call and
     teardown lines of one test counted once as a test, their seconds added), longest
-    first; the target row (pytest seconds against 480 s) and the section in RESULTS.md."""
+    first; the child pytest's module listed apart, outside the sums; the target row (pytest seconds against 480 s) and the section in RESULTS.md."""
     from benchmarks import suite_time
     log = tmp_path / "timing.log"
     log.write_text("1.00 2.00 tests/test_a.py::test_x\n0.50 0.50 tests/test_a.py::test_x\n"
                    "3.00 3.50 tests/test_b.py::test_y[1]\n0.25 4.00 tests/test_b.py::test_y[2]\n"
-                   "not a timing line\n")
+                   "0.50 1.00 tests/sweep_suite.py::test_z\nnot a timing line\n")
     mods = suite_time.parse_log(log.read_text())
-    assert [(m["module"], m["tests"]) for m in mods] == [("tests/test_b.py", 2), ("tests/test_a.py", 1)]
+    assert [(m["module"], m["tests"]) for m in mods] == [("tests/test_b.py", 2), ("tests/test_a.py", 1),
+                                                         ("tests/sweep_suite.py", 1)]
     assert mods[0]["wall_s"] == 7.5 and mods[0]["cpu_s"] == 3.25 and mods[1]["wall_s"] == 2.5
     monkeypatch.setattr(common, "RESULTS", tmp_path)
     suite_time.main(["--log", str(log), "--pytest-seconds", "600", "--note", "test machine"])
@@ -311,4 +312,5 @@ def test_suite_time_from_a_timing_log(tmp_path, monkeypatch):
     row = next(ln for ln in text.splitlines() if ln.startswith("| the test suite"))
     assert "| ≤ 480 | 600 | missed by 1.25× |" in row and "test_b.py 8 s" in row and "test machine" in row
     assert "## Test suite time" in text and "| tests/test_b.py | 2 | 8 | 3 | 75 % |" in text
-    assert "| all | 3 | 10 | 5 | 100 % |" in text
+    assert "| all | 3 | 10 | 5 | 100 % |" in text  # the child suite's seconds are inside test_sweep.py's
+    assert "| tests/sweep_suite.py (in tests/test_sweep.py's child process) | 1 | 1 | 0 | – |" in text
