@@ -126,7 +126,7 @@ def targets(data: dict) -> list:
                        f"control flow of the loops {(prof['control_flow_s'] + prof['run_loop_s']) * us:.0f}, of "
                        f"{prof['simulate_per_step_s'] * us:.0f}")
         if model == "M1" and value is not None:
-            detail += _loop_kernel_target_note() + _m1_ratio_target_note()
+            detail += _loop_kernel_target_note() + _m1_ratio_note(target=True)
         rows.append((key, value, detail))
     b = data.get("batch", {})
     value, detail = None, "not run"
@@ -381,26 +381,21 @@ def sec_agreement(d):
     return "".join(out)
 
 
-def _m1_ratio_note() -> str:
-    """The latest re-measurement of M1's single-run ratio (benchmarks/m1_ratio.py), if any."""
+def _m1_ratio_note(target: bool = False) -> str:
+    """The latest re-measurement of M1's single-run ratio (benchmarks/m1_ratio.py), if
+    any: a paragraph of the single-run section, or (``target``) a clause of the M1
+    target row."""
     path = Path(__file__).parent / "results" / "m1_ratio.json"
     if not path.exists():
         return ""
     m = json.loads(path.read_text())
+    if target:
+        return (f"; re-measured {m['stamp']['date'][:10]} on {m['stamp'].get('machine', '?')} "
+                f"(`PYTHONPATH=. python benchmarks/m1_ratio.py`, same settings, interleaved): "
+                f"**{m['ratio']:.2f}** ({m['ancf_run_s']:.3f} s against {m['exudyn_run_s']:.3f} s)")
     return (f"Re-measured on {m['stamp']['date'][:10]} (`PYTHONPATH=. python benchmarks/m1_ratio.py`: the "
             f"settings below, interleaved, median of 5): ancf_jax {m['ancf_run_s']:.3f} s against Exudyn "
             f"{m['exudyn_run_s']:.3f} s, ratio {m['ratio']:.2f}.\n\n")
-
-
-def _m1_ratio_target_note() -> str:
-    """The latest re-measurement (benchmarks/m1_ratio.py) for the M1 target row."""
-    path = Path(__file__).parent / "results" / "m1_ratio.json"
-    if not path.exists():
-        return ""
-    m = json.loads(path.read_text())
-    return (f"; re-measured {m['stamp']['date'][:10]} on {m['stamp'].get('machine', '?')} "
-            f"(`PYTHONPATH=. python benchmarks/m1_ratio.py`, same settings, interleaved): **{m['ratio']:.2f}** "
-            f"({m['ancf_run_s']:.3f} s against {m['exudyn_run_s']:.3f} s)")
 
 
 def _loop_kernels() -> dict | None:
