@@ -65,8 +65,8 @@ long fits optimized. Measured on 2 cores (jaxlib 0.10.2, no cache, fresh process
 (6 elements) first call 7.7–8.0 s at XLA's default LLVM level (3) and 5.9 s at level 0;
 its 2 s run (2,000 steps) 0.17–0.22 s at level 3 and 0.93 s at level 0. The test suite
 compiles at level 0 (``tests/conftest.py``) and its identification modules at level 3:
-``tests/test_identification.py`` 118 → 77 s (one process, 54 tests), whose fits run the
-same Jacobian program dozens of times.
+``tests/test_identification.py`` 114 → 71 s of pytest (one process, 54 tests), whose fits
+run the same Jacobian program dozens of times.
 
 An unknown flag in ``XLA_FLAGS`` aborts the process, and XLA renames and removes
 flags between releases, so the flags are added only for the jaxlib releases they were
@@ -185,8 +185,9 @@ def compiler_options(**options: bool | int | float | str):
     """XLA compiler options for the programs ancf_jax compiles inside the ``with`` block
     (see the module docstring), e.g. ``compiler_options(xla_backend_optimization_level=0)``
     to compile a short run faster (it runs slower). Nested blocks add to the outer
-    block's options. A program's own choice takes precedence (the initial-state program,
-    which runs once, stays at :func:`run_once_options`). A program compiled with other options is a
+    block's options. A program's own choice of an option takes precedence (the
+    initial-state program, which runs once, keeps the LLVM level of
+    :func:`run_once_options` where those apply; the block's other options reach it). A program compiled with other options is a
     different program: it is compiled again, and cached separately.
 
     Raises:

@@ -398,7 +398,9 @@ def _signature(args):
 
 
 def _options_key(options):
-    return tuple(sorted(options.items())) if options else ()
+    """Compiler options as part of a cache key (types too: 3 and 3.0, True and 1 are
+    different options to XLA)."""
+    return tuple((k, type(v).__name__, v) for k, v in sorted(options.items())) if options else ()
 
 
 def compiled(fn, *args, options=None):
@@ -458,7 +460,8 @@ def compiled_pair(first, first_args, second, second_args, first_options=None):
     ``first``'s outputs), and then ``second`` is compiled: the compile time of the pair
     is about the sum of the two tracings and ``second``'s XLA compilation.
 
-    ``first_options``: XLA compiler options of ``first`` (``second`` gets the defaults).
+    ``first_options``: XLA compiler options of ``first``; both also get those of enclosing
+    :func:`ancf_jax.compiler_options` blocks (``first_options`` take precedence).
 
     Returns (first's executable, second's executable, wall-clock seconds spent
     compiling now; 0.0 when both were cached)."""

@@ -89,6 +89,8 @@ def summarize(modules: list[dict], pytest_s: float | None, **extra) -> dict:
 
 def markdown(d: dict) -> str:
     from .common import table
+    if not d["modules"]:
+        return "No test in the log.\n"
     rows = [[m["module"], m["tests"], f"{m['wall_s']:.0f}", f"{m['cpu_s']:.0f}",
              f"{100 * m['wall_s'] / d['worker_wall_s']:.0f} %"] for m in d["modules"][:TOP]]
     rest = d["modules"][TOP:]

@@ -6,7 +6,7 @@
 #       extension: .py
 #       format_name: percent
 #       format_version: '1.3'
-#       jupytext_version: 1.19.6
+#       jupytext_version: 1.19.7
 #   kernelspec:
 #     display_name: Python 3
 #     language: python
@@ -29,7 +29,7 @@
 #     ancf-jax fit m1 --data data.csv --params alpha,beta --out results/m1-fit
 #
 # `ANCF_JAX_QUICK=1` shortens the span and coarsens the mesh (to the problem of
-# `tests/test_identification.py`, whose compiled programs it then shares).
+# `tests/test_identification.py`).
 
 # %%
 import os

@@ -6,7 +6,7 @@
 #       extension: .py
 #       format_name: percent
 #       format_version: '1.3'
-#       jupytext_version: 1.19.6
+#       jupytext_version: 1.19.7
 #   kernelspec:
 #     display_name: Python 3
 #     language: python
@@ -41,7 +41,7 @@
 #         --noise 1e-4 --out results/tip-fit
 #
 # `ANCF_JAX_QUICK=1` fits the 3-element, 2 ms, 1 s problem of
-# `tests/test_identification_real.py` (sharing its compiled programs) and only checks
+# `tests/test_identification_real.py` and only checks
 # the discretization (no refinement budget); the full run fits 6 elements over the
 # paper's 2 s and refines.
 

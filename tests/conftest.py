@@ -41,8 +41,8 @@ def pytest_configure(config):
 # A module whose tests run long (fits that run one program dozens of times) declares
 # ``COMPILER_OPTIONS = {...}``: its programs compile with them (ancf_jax.compiler_options),
 # e.g. at XLA's LLVM level 3 instead of the suite's 0 above. Measured per module, one
-# process, fresh caches (2026-12-07, 2 cores): tests/test_identification.py 118 s at
-# level 0, 77 s at 3; across the suite at level 3 instead of 0 (CI's command, per-module
+# process, fresh caches (2026-12-07, 2 cores): tests/test_identification.py 114 s of
+# pytest at level 0, 71 s at 3; across the suite at level 3 instead of 0 (CI's command, per-module
 # worker time): test_identification_real 353 -> 306 s, while the simulation modules
 # got slower (cable machinery 160 -> 202 s, shipped scenarios 113 -> 151 s, Newton matrix
 # 107 -> 141 s: short runs, compile-bound).
@@ -97,11 +97,13 @@ def _free_programs_near_the_limit():
 # The longest modules start first. With ``--dist loadscope --no-loadscope-reorder``
 # each module runs whole in one xdist worker, handed out in collection order; a long
 # module collected late leaves the other worker idle at the end of the run. Longest
-# first is the classic greedy schedule for two workers, except that the identification
-# modules and the M1/M2/CLI modules go before the notebooks: notebooks 02, 03, 04 and 06
-# then find the programs those modules compiled in the persistent cache (measured:
-# after tests/models and test_cli_models, notebook 02 ran in 19.0 instead of 22.4 s, 03
-# in 29.5 instead of 37.7 s). The list holds the modules over about a minute of worker
+# first is the classic greedy schedule for two workers, except that the M1/M2/CLI
+# modules go before the notebooks: notebooks 02 and 03 then find the programs those
+# modules compiled in the persistent cache (measured: after tests/models and
+# test_cli_models, notebook 02 ran in 19.0 instead of 22.4 s, 03 in 29.5 instead of
+# 37.7 s). (The identification modules no longer share programs with notebooks 04 and
+# 06: they compile at level 3 by COMPILER_OPTIONS, which is part of the cache key, 04 at
+# level 3 by its XLA_FLAGS and 06 at level 0.) The list holds the modules over about a minute of worker
 # time (ANCF_JAX_TIMING_LOG, summed per module) and those; the rest keep their order.
 _LONG_MODULES = ("tests/test_identification.py", "tests/test_identification_real.py", "tests/models/test_m1.py",
                  "tests/models/test_m2.py", "tests/test_cli_models.py", "tests/test_notebooks.py",
