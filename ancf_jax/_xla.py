@@ -61,7 +61,9 @@ Compiler options for a block of code: :func:`compiler_options` sets XLA compiler
 compiles in a ``with`` block: simulations (:func:`ancf_jax.simulation.simulate`,
 ``simulate_batch``) and identification's evaluation programs. ``XLA_FLAGS`` is read once per
 process; these apply per program, so one process can compile short test runs fast and
-long fits optimized. Measured on 2 cores (jaxlib 0.10.2, no cache, fresh processes): M1
+long fits optimized. ``ANCF_JAX_COMPILER_OPTIONS=name=value[,name=value...]`` in the
+environment sets them for the whole process (read at import; a child process, e.g. a
+notebook kernel, inherits them). Measured on 2 cores (jaxlib 0.10.2, no cache, fresh processes): M1
 (6 elements) first call 7.7–8.0 s at XLA's default LLVM level (3) and 5.9 s at level 0;
 its 2 s run (2,000 steps) 0.17–0.22 s at level 3 and 0.93 s at level 0. The test suite
 compiles at level 0 (``tests/conftest.py``) and its identification modules at level 3:
@@ -176,8 +178,43 @@ def run_once_options() -> dict | None:
     return dict(RUN_ONCE_OPTIONS)
 
 
-#: XLA compiler options set by :func:`compiler_options` for the current context (sorted items)
-_OPTIONS: contextvars.ContextVar = contextvars.ContextVar("ancf_jax_compiler_options", default=())
+#: environment variable with compiler options for the whole process, read when ancf_jax
+#: is imported: ``name=value[,name=value...]`` (the outermost :func:`compiler_options`)
+OPTIONS_ENV = "ANCF_JAX_COMPILER_OPTIONS"
+
+
+def parse_options(text: str) -> dict:
+    """Compiler options from ``name=value[,name=value...]`` (:data:`OPTIONS_ENV`):
+    ``true``/``false`` are booleans, integers and decimals numbers, anything else a
+    string; empty text: none.
+
+    Raises:
+        ValueError: an entry is not ``name=value``.
+    """
+    out: dict = {}
+    for entry in filter(None, (e.strip() for e in text.split(","))):
+        name, sep, value = (s.strip() for s in entry.partition("="))
+        if not sep or not name or not value:
+            raise ValueError(f"{OPTIONS_ENV}: {entry!r} is not name=value (accepted: XLA compiler options "
+                             f"as name=value[,name=value...], e.g. xla_backend_optimization_level=0)")
+        if value.lower() in ("true", "false"):
+            out[name] = value.lower() == "true"
+            continue
+        for kind in (int, float):
+            try:
+                out[name] = kind(value)
+                break
+            except ValueError:
+                pass
+        else:
+            out[name] = value
+    return out
+
+
+#: XLA compiler options set by :func:`compiler_options` for the current context (sorted
+#: items); outside any block those of :data:`OPTIONS_ENV`
+_OPTIONS: contextvars.ContextVar = contextvars.ContextVar(
+    "ancf_jax_compiler_options", default=tuple(sorted(parse_options(os.environ.get(OPTIONS_ENV, "")).items())))
 
 
 @contextlib.contextmanager
@@ -185,9 +222,10 @@ def compiler_options(**options: bool | int | float | str):
     """XLA compiler options for the programs ancf_jax compiles inside the ``with`` block
     (see the module docstring), e.g. ``compiler_options(xla_backend_optimization_level=0)``
     to compile a short run faster (it runs slower). Nested blocks add to the outer
-    block's options. A program's own choice of an option takes precedence (the
-    initial-state program, which runs once, keeps the LLVM level of
-    :func:`run_once_options` where those apply; the block's other options reach it). A program compiled with other options is a
+    block's options, and the outermost to those of ``ANCF_JAX_COMPILER_OPTIONS``. A
+    program's own choice of an option takes precedence (the initial-state program, which
+    runs once, keeps the LLVM level of :func:`run_once_options` where those apply; the
+    block's other options reach it). A program compiled with other options is a
     different program: it is compiled again, and cached separately.
 
     Raises:

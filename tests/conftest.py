@@ -97,13 +97,13 @@ def _free_programs_near_the_limit():
 # The longest modules start first. With ``--dist loadscope --no-loadscope-reorder``
 # each module runs whole in one xdist worker, handed out in collection order; a long
 # module collected late leaves the other worker idle at the end of the run. Longest
-# first is the classic greedy schedule for two workers, except that the M1/M2/CLI
-# modules go before the notebooks: notebooks 02 and 03 then find the programs those
+# first is the classic greedy schedule for two workers, except that the identification
+# and the M1/M2/CLI modules go before the notebooks, which then find the programs those
 # modules compiled in the persistent cache (measured: after tests/models and
 # test_cli_models, notebook 02 ran in 19.0 instead of 22.4 s, 03 in 29.5 instead of
-# 37.7 s). (The identification modules no longer share programs with notebooks 04 and
-# 06: they compile at level 3 by COMPILER_OPTIONS, which is part of the cache key, 04 at
-# level 3 by its XLA_FLAGS and 06 at level 0.) The list holds the modules over about a minute of worker
+# 37.7 s; notebooks 04 and 06 compile with the identification modules' options,
+# tests/test_notebooks.py, and ran in 34 and 38 s after them instead of 49 and 52 s).
+# The list holds the modules over about a minute of worker
 # time (ANCF_JAX_TIMING_LOG, summed per module) and those; the rest keep their order.
 _LONG_MODULES = ("tests/test_identification.py", "tests/test_identification_real.py", "tests/models/test_m1.py",
                  "tests/models/test_m2.py", "tests/test_cli_models.py", "tests/test_notebooks.py",

@@ -157,3 +157,33 @@ def test_compiler_options_reach_xla_and_key_the_in_process_cache():
     with pytest.raises(ValueError, match="xla_backend_optimization_level must be a bool, int, float or str"):
         with compiler_options(xla_backend_optimization_level=[3]):
             pass
+
+
+def test_compiler_options_from_the_environment():
+    """``ANCF_JAX_COMPILER_OPTIONS`` (name=value[,...]): parsed into booleans, numbers and
+    strings; the process's options outside any block (a child process reads them at
+    import); an entry that is not name=value fails the import with one line naming the
+    variable."""
+    import os
+    import subprocess
+    import sys
+
+    import pytest
+    assert _xla.parse_options("") == {}
+    assert _xla.parse_options(" xla_backend_optimization_level=3, a=true,b=False ,c=0.5,d=x") == \
+        {"xla_backend_optimization_level": 3, "a": True, "b": False, "c": 0.5, "d": "x"}
+    for bad in ("level", "=3", "a=", "a=1,,b"):
+        if bad == "a=1,,b":  # empty entries are skipped, a bare name is not
+            with pytest.raises(ValueError, match="'b' is not name=value"):
+                _xla.parse_options(bad)
+            continue
+        with pytest.raises(ValueError, match="ANCF_JAX_COMPILER_OPTIONS: .* is not name=value"):
+            _xla.parse_options(bad)
+    code = "import ancf_jax, ancf_jax._xla as x; print(x.program_options(), x.program_options({'a': 0}))"
+    for value, expected, rc in (("xla_backend_optimization_level=3",
+                                 "{'xla_backend_optimization_level': 3} {'xla_backend_optimization_level': 3, 'a': 0}", 0),
+                                ("level", "ANCF_JAX_COMPILER_OPTIONS: 'level' is not name=value", 1)):
+        env = dict(os.environ, ANCF_JAX_COMPILER_OPTIONS=value, JAX_PLATFORMS="cpu")
+        out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+        assert out.returncode == rc and expected in (out.stdout + out.stderr), out.stderr[-2000:]
+

@@ -5,7 +5,6 @@ diverge. Each notebook is one test, so ``pytest -n 2`` runs two at a time.
 """
 
 import os
-import re
 import sys
 from pathlib import Path
 
@@ -88,12 +87,15 @@ finally:
 """
 
 
-#: notebooks whose kernels compile at XLA's default LLVM level (3), not the suite's 0
-#: (tests/conftest.py): their fits run one program many times. Measured as scripts, quick
-#: mode, fresh caches, one at a time (2026-12-07, 2 cores), level 0 against 3:
-#: 04_identification 79 s against 49 s; the others are faster at 0 or equal (01 16/21 s,
-#: 02 22/27, 03 38/40, 05 38/51, 06 52/52).
-OPTIMIZED = {"04_identification"}
+#: notebooks whose kernels compile ancf_jax's programs at LLVM level 3, not the suite's 0
+#: (tests/conftest.py), with the same options as the identification modules
+#: (``ANCF_JAX_COMPILER_OPTIONS``, the modules' COMPILER_OPTIONS): their fits run one
+#: program many times, and they find the programs those modules compiled in the
+#: persistent cache. Measured as scripts, quick mode, one at a time (2026-12-07, 2
+#: cores), fresh caches, level 0 against 3: 04_identification 79 s against 49 s, the
+#: others faster at 0 or equal (01 16/21 s, 02 22/27, 03 38/40, 05 38/51, 06 52/52); at
+#: level 3 after the two identification modules filled the cache: 04 34 s, 06 38 s.
+OPTIMIZED = {"04_identification", "06_measured_record"}
 
 
 @pytest.mark.slow
@@ -107,7 +109,8 @@ def test_notebook_runs_in_quick_mode(script, tmp_path):
         pytest.skip("needs the test extra (nbclient, ipykernel)")
     env = dict(os.environ, ANCF_JAX_QUICK="1")
     if script.stem in OPTIMIZED:
-        env["XLA_FLAGS"] = re.sub(r"--xla_backend_optimization_level=\S+", "", env.get("XLA_FLAGS", "")).strip()
+        from tests.test_identification import COMPILER_OPTIONS
+        env["ANCF_JAX_COMPILER_OPTIONS"] = ",".join(f"{k}={v}" for k, v in COMPILER_OPTIONS.items())
     env.pop("MPLBACKEND", None)  # the kernel's inline backend renders the figures
     # the kernel imports this checkout of ancf_jax, whatever is installed
     env["PYTHONPATH"] = os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])
