@@ -403,14 +403,20 @@ def _options_key(options):
     return tuple((k, type(v).__name__, v) for k, v in sorted(options.items())) if options else ()
 
 
+def _key(fn, args, options):
+    """(cache key of ``fn`` for ``args``, the compiler options it compiles with: its own
+    ``options`` with those of the enclosing :func:`ancf_jax.compiler_options` blocks)."""
+    options = _xla.program_options(options)
+    return (fn, _signature(args), _options_key(options)), options
+
+
 def compiled(fn, *args, options=None):
     """AOT-compiled ``fn`` for these arguments, cached in-process by their structure
     and the compiler options (``options``: the program's own XLA compiler options, with
     those of enclosing :func:`ancf_jax.compiler_options` blocks).
 
     Returns (executable, seconds spent compiling now; 0.0 when cached)."""
-    options = _xla.program_options(options)
-    key = (fn, _signature(args), _options_key(options))
+    key, options = _key(fn, args, options)
     hit = _COMPILED.get(key)
     if hit is not None:
         return hit, 0.0
@@ -424,8 +430,7 @@ def compiled(fn, *args, options=None):
 
 def is_compiled(fn, *args, options=None) -> bool:
     """Whether :func:`compiled` holds ``fn`` for these arguments and options now."""
-    options = _xla.program_options(options)
-    return (fn, _signature(args), _options_key(options)) in _COMPILED
+    return _key(fn, args, options)[0] in _COMPILED
 
 
 #: one background thread for XLA compilations (:func:`compiled_pair`); XLA releases the
@@ -465,8 +470,7 @@ def compiled_pair(first, first_args, second, second_args, first_options=None):
 
     Returns (first's executable, second's executable, wall-clock seconds spent
     compiling now; 0.0 when both were cached)."""
-    first_options = _xla.program_options(first_options)
-    key = (first, _signature(first_args), _options_key(first_options))
+    key, first_options = _key(first, first_args, first_options)
     devices = _devices(first_args)
     if key in _COMPILED or len(devices) > 1:
         # only the second may be new, or the arguments are sharded (the outputs'
