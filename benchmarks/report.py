@@ -40,6 +40,9 @@ EXTRA = ("batch_gpu", "batch_gpu_dense")
 #: written by ``python -m benchmarks.step_profile`` (not by benchmarks.run); rendered
 #: after the single runs
 PROFILE = "step_profile"
+#: written by ``python -m benchmarks.kernel_census`` (not by benchmarks.run); rendered
+#: after the step profile
+CENSUS = "kernel_census"
 #: written by ``python -m benchmarks.pantograph_catenary`` (issue 21; not by
 #: benchmarks.run); rendered last, with its own targets
 PANTOGRAPH = "pantograph_catenary"
@@ -56,7 +59,7 @@ def _dense(options) -> bool:
 
 def load(results: Path) -> dict:
     out = {}
-    for name in SECTIONS + EXTRA + (PROFILE, PANTOGRAPH, SUITE):
+    for name in SECTIONS + EXTRA + (PROFILE, CENSUS, PANTOGRAPH, SUITE):
         p = results / f"{name}.json"
         if p.exists():
             out[name] = json.loads(p.read_text())
@@ -125,6 +128,12 @@ def targets(data: dict) -> list:
                        f"solves {prof['iterations_per_step'] * pp['solve'] * us:.0f}, powers {pp['powers'] * us:.0f}, "
                        f"control flow of the loops {(prof['control_flow_s'] + prof['run_loop_s']) * us:.0f}, of "
                        f"{prof['simulate_per_step_s'] * us:.0f}")
+        census = next((dict(r, stamp=data[CENSUS]["stamp"]) for r in data.get(CENSUS, {}).get("rows", [])
+                       if r["model"] == "M1" and r["elements"] == 6), None)
+        if model == "M1" and value is not None and census:
+            detail += (f"; the step runs {census['kernels_per_step']:.0f} XLA:CPU kernels at "
+                       f"{census['iterations_per_step']:.2g} Newton it., {census['ns_per_kernel']:.0f} ns each "
+                       f"on average ({census['stamp']['date'][:10]}, Kernels per step below)")
         if model == "M1" and value is not None:
             detail += _loop_kernel_target_note() + _m1_ratio_note(target=True)
         rows.append((key, value, detail))
@@ -506,6 +515,25 @@ def sec_step_profile(d):
             + f"\n_Command: `python -m benchmarks.step_profile`; {d['stamp']['date']}._\n")
 
 
+def sec_kernel_census(d, top=8):
+    """How many XLA:CPU kernels a step runs (benchmarks/kernel_census.py)."""
+    rows = []
+    for r in d["rows"]:
+        kinds = ", ".join(f"{k} {c:.0f}" for k, c in list(r["kinds"].items())[:top])
+        rows.append([f"{r['model']} ({r['elements']} el., {r['coordinates']} coord.)", f"{r['iterations_per_step']:.2f}",
+                     f"{r['kernels_per_step']:.0f}", f"{r['kernels_per_iteration']:.0f}",
+                     f"{r['step_s'] * 1e6:.3g}", f"{r['ns_per_kernel']:.0f}", kinds])
+    return ("### Kernels per step\n\nXLA:CPU runs a compiled program as a sequence of kernels dispatched one "
+            "after the other, a while loop's body at every iteration. Counted exactly from the trace of "
+            f"`{d['flag']}` (one event per kernel run), bare generalized-α step (`lax.scan` of the step, "
+            "single_run's settings, from the initial state); the step's time from a second fresh process "
+            "without the flag (best of 5); per iteration: kernels per step / Newton iterations per step; "
+            "time per kernel: step time / kernels:\n\n"
+            + table(["model", "Newton it./step", "kernels per step", "per iteration", "step [µs]",
+                     "ns per kernel", f"most frequent kinds (per step, first {top})"], rows)
+            + f"\n_Command: `{d['command']}`; {d['stamp']['date']}._\n")
+
+
 def _threaded_batch_detail() -> str:
     """The same batch as threads of single runs (batch_threads*.json), for the target
     row: the verdict stays on the vmapped batch the target names."""
@@ -875,6 +903,8 @@ def render(results: Path | None = None, out: Path | None = None) -> Path:
             parts.append(renderers[name](data[name]) + "\n")
         if name == "single_run" and PROFILE in data:
             parts.append(sec_step_profile(data[PROFILE]) + "\n")
+        if name == "single_run" and CENSUS in data:
+            parts.append(sec_kernel_census(data[CENSUS]) + "\n")
         if name == "single_run" and _loop_kernels():
             parts.append(sec_loop_kernels(_loop_kernels()) + "\n")
         if name == "batch":

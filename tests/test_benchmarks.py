@@ -83,6 +83,10 @@ def synthetic(tmp_path):
                              simulate_per_step_s=90e-6, bare_step_s=80e-6, model_s=60e-6, control_flow_s=20e-6,
                              run_loop_s=10e-6, parts_s=dict(residual=8e-6, solve=2e-6, newton_matrix=14e-6,
                                                             factorization=10e-6, powers=6e-6)))
+    put("kernel_census", dict(quick=False, flag="--xla_cpu_enable_xprof_traceme=true", command="cmd census",
+                              rows=[dict(model="M1", elements=6, coordinates=31, steps=400, iterations_per_step=2.5,
+                                         kernels_per_step=500.0, kernels_per_iteration=200.0, step_s=50e-6,
+                                         ns_per_kernel=100.0, kinds={"multiply_reduce_fusion": 100.0, "copy": 70.0})]))
     put("agreement", dict(section="agreement", exudyn=False, exudyn_missing="Exudyn disabled", rows=[],
                           error="RuntimeError: boom"))
 
@@ -94,10 +98,13 @@ def test_report_renders_from_json_only(tmp_path):
     assert "Quick mode" in text and "test cpu" in text
     # the step profile: parts × calls per step, their sum and what the loops add
     assert "### Profile of the M1 step" in text and "| **sum of the parts** |  |  | **60** |" in text
+    # the kernel census: kernels per step and per iteration, time per kernel, the most frequent kinds
+    assert "| M1 (6 el., 31 coord.) | 2.50 | 500 | 200 | 50 | 100 | multiply_reduce_fusion 100, copy 70 |" in text
     lines = {ln.split("|")[1].strip(): ln for ln in text.splitlines() if ln.startswith("| ") and "≤" in ln}
     m1 = next(v for k, v in lines.items() if k.startswith("M1 (6 el.)"))
     m2 = next(v for k, v in lines.items() if k.startswith("M2 (24 el.)"))
     assert "| met |" in m1 and "missed by 4×" in m2  # limit 0.2
+    assert "the step runs 500 XLA:CPU kernels at 2.5 Newton it., 100 ns each on average" in m1
     assert "missed by 1.5×" in next(v for k, v in lines.items() if k.startswith("compile time of the three"))
     scaling_line = next(v for k, v in lines.items() if k.startswith("per-step cost"))
     assert "missed: p = 1.3 > 1" in scaling_line and "marginal cost 100 µs per element and step" in scaling_line
@@ -123,6 +130,16 @@ def test_report_renders_from_json_only(tmp_path):
     for heading in ("Single runs", "Batch throughput", "Gradient", "Per-step cost", "Work–precision",
                     "Compile time", "Agreement"):
         assert heading in text
+
+
+def test_kernel_census_kinds():
+    """A kernel's kind is its name without XLA's instruction number (fusions, copies,
+    library calls); events that are not kernels (executors, loops) are left out."""
+    from benchmarks import kernel_census as K
+    assert [K.kind(n) for n in ("multiply_reduce_fusion.27", "copy.23", "lu.25", "triangular_solve_3", "add")] == \
+        ["multiply_reduce_fusion", "copy", "lu", "triangular_solve", "add"]
+    assert all(n.startswith(K.NOT_KERNELS) for n in ("ThunkExecutor::Execute", "while.196", "end: copy"))
+    assert not "copy.23".startswith(K.NOT_KERNELS)
 
 
 def test_run_without_exudyn_end_to_end(tmp_path, monkeypatch):
