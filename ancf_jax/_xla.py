@@ -22,6 +22,19 @@ not set (a flag already named in ``XLA_FLAGS``, with any value, is left as it is
   ``xla_cpu_emitter_verification_level=0``, ``xla_cpu_copy_insertion_use_region_analysis=false``,
   and JAX's ``jax_exec_time_optimization_effort=-1``; most of the remaining time is
   XLA's HLO passes (LLVM at level 0 instead of 3 saves ~20 %).
+* ``--xla_cpu_experimental_ynn_fusion_type=`` (no fusion types): XLA:CPU hands batched
+  ``dot`` fusions to the YNNPACK library, which ran the element matrices of mid-size
+  beams (products over elements × quadrature points, :mod:`ancf_jax._products`) several
+  times slower than XLA's own kernels. Measured on 2 cores (jaxlib 0.10.2, 2026-12-07),
+  both settings compiled in one process as per-program options and run interleaved,
+  median of 5: M2 (24 elements, 0–1 s) 0.358 → 0.172 s, the three-mesh M2 batch (12, 18
+  and 24 elements, 0–0.5 s) 1.60 → 0.68 s, M1 (6 elements, 0–2 s: no dot) 0.157 →
+  0.159 s, a vmapped batch of 64 M1 variants (0–0.5 s) 3.01 → 3.07 s (the same within
+  the spread); in fresh processes (one each, two alternations) M1 with 24 elements 268–435
+  → 190–197 µs per step, 96 elements 1,101–1,258 → 840–945 µs, the shipped
+  pantograph–catenary (2,400 elements) 3.44 → 2.61 s for 0.2 s. Results agree to
+  rounding (at most 9e-14 m in q over 1 s of M1 and M2, 1.3e-12 m for the catenary;
+  ``python -m benchmarks.kernel_census`` found the YNNPACK kernels at 24 elements).
 
 Programs that run once per simulation (the initial state: consistent accelerations and
 projections, a few linear solves) are compiled with :func:`run_once_options`, LLVM's
@@ -89,7 +102,7 @@ ENV = "ANCF_JAX_XLA_FLAGS"
 _OFF = ("0", "off", "false", "no")
 
 #: flags added to ``XLA_FLAGS`` (see the module docstring for the measurements)
-DEFAULT_FLAGS = ("--xla_cpu_use_fusion_emitters=false",)
+DEFAULT_FLAGS = ("--xla_cpu_use_fusion_emitters=false", "--xla_cpu_experimental_ynn_fusion_type=")
 
 #: compiler options of the programs that run once per simulation (see the module docstring)
 RUN_ONCE_OPTIONS = {"xla_backend_optimization_level": 0}
