@@ -62,3 +62,27 @@ def test_xla_flags_setting():
         assert flags_in_fresh_process(ANCF_JAX_LOOP_KERNELS="1", XLA_FLAGS=own) == f"{own + ' ' + default!r} 1"
     # a backend started before ancf_jax is imported: nothing changed (too late to act)
     assert flags_in_fresh_process(pre="import jax; jax.devices(); ") == "None 1"
+
+
+YNN_CODE = ("import ancf_jax, jax, jax.numpy as jnp; "
+            "f = jax.jit(lambda a, b: jnp.tanh(jnp.matmul(a, b)) * 2.0); a = jnp.ones((72, 8, 8)); "
+            "print('ynn' in f.lower(a, a).compile().as_text().lower())")
+
+
+def test_ynnpack_fusions_off_by_default():
+    """The batched small products of the element code (here 72 = elements × quadrature
+    points of 8×8 matrices) are compiled by XLA itself, not handed to YNNPACK
+    (``--xla_cpu_experimental_ynn_fusion_type=``, ancf_jax/_xla.py); with the defaults
+    switched off, XLA's own default fuses them into YNNPACK calls."""
+    from ancf_jax import _xla
+    if _xla._jaxlib_release() not in _xla.TESTED_JAXLIB:
+        pytest.skip("flags are added for the tested jaxlib releases only")
+
+    def ynn(**env):
+        e = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", "ANCF_JAX_XLA_FLAGS")}
+        e.update(JAX_PLATFORMS="cpu", **env)
+        out = subprocess.run([sys.executable, "-c", YNN_CODE], env=e, capture_output=True, text=True, check=True)
+        return out.stdout.strip().splitlines()[-1]
+
+    assert ynn() == "False"
+    assert ynn(ANCF_JAX_XLA_FLAGS="off") == "True"
