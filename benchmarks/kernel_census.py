@@ -55,25 +55,15 @@ def kind(name: str) -> str:
 
 
 def _bare(name, n, steps):
-    """(compiled bare-step program, its argument, steps) for the census."""
-    import jax
-
+    """(bare-step program, its argument, model facts) for the census."""
     from ancf_jax.simulation import make_solver
 
     from . import cases as C
+    from .step_profile import make_bare_step
     h, opts = C.chosen_settings(name)
     system, state = C.m1(n) if name == "M1" else C.m2(n)
     solver = make_solver("generalized-alpha", **opts).forward_only()
-    ctx = solver.prepare(system)
-    carry = solver.init(system, state, ctx)
-
-    @jax.jit
-    def bare(c):
-        def body(c, _):
-            c2, info = solver.step(system, c, h, ctx)
-            return c2, info.iterations
-        return jax.lax.scan(body, c, None, length=steps)
-
+    bare, carry, _ = make_bare_step(solver, system, state, h, steps)
     return bare, carry, dict(h=h, options=opts, coordinates=system.n_coordinates,
                              multipliers=system.n_constraints)
 

@@ -64,6 +64,24 @@ def per_call(f, x) -> float:
     return best / N
 
 
+def make_bare_step(solver, system, state, h, steps):
+    """(program, initial carry, context): ``steps`` steps of size h [s] of ``solver``
+    (an integrator) from ``state`` as a jitted ``lax.scan`` of its step alone, returning
+    the final carry and the Newton iterations of every step."""
+    import jax
+    ctx = solver.prepare(system)
+    carry0 = solver.init(system, state, ctx)
+
+    @jax.jit
+    def bare(c):
+        def body(c, _):
+            c2, info = solver.step(system, c, h, ctx)
+            return c2, info.iterations
+        return jax.lax.scan(body, c, None, length=steps)
+
+    return bare, carry0, ctx
+
+
 def profile(system, state, h, opts, t_end=T_END, *, t_parts=1.0) -> dict:
     """The profile of a generalized-α step (module docstring) of ``system`` at step h
     [s] with the solver options ``opts`` over 0–``t_end`` [s], its parts timed at the
@@ -83,16 +101,7 @@ def profile(system, state, h, opts, t_end=T_END, *, t_parts=1.0) -> dict:
     kw = dict(t_end=t_end, dt=h, output_dt=C.GRID, solver=solver, progress=False)
     res = simulate(system, state, **kw)
     sim = min(simulate(system, state, **kw).wall_time_s for _ in range(REPS)) / steps
-    ctx = solver.prepare(system)
-    carry0 = solver.init(system, state, ctx)
-
-    @jax.jit
-    def bare(c):
-        def body(c, _):
-            c2, info = solver.step(system, c, h, ctx)
-            return c2, info.iterations
-        return jax.lax.scan(body, c, None, length=steps)
-
+    bare, carry0, _ = make_bare_step(solver, system, state, h, steps)
     jax.block_until_ready(bare(carry0))
     best = np.inf
     for _ in range(REPS):
