@@ -212,6 +212,10 @@ def _suite_target(d):
     detail = (f"{d['tests']} tests, {d['worker_wall_s']:.0f} s of worker time on 2 workers "
               f"({d['worker_cpu_s']:.0f} s CPU in the workers; notebooks, the sweep suite and the Exudyn "
               f"cross-check run in child processes); longest modules: {top} (section below)")
+    if "worker_compile_s" in d:
+        detail += (f"; what the workers' time is made of: XLA compilation {d['worker_compile_s']:.0f} s, "
+                   f"lowering {d['worker_lower_s']:.0f} s, tracing {d['worker_trace_s']:.0f} s (JAX's own "
+                   f"duration events), the rest running programs, Python and waiting for child processes")
     if d.get("note"):
         detail += f"; {d['note']}"
     return d.get("pytest_s"), detail

@@ -2,12 +2,15 @@
 
 Target (issue 17): ``python -m pytest -n 2 -q`` takes at most 8 minutes of pytest on a
 2-core CI machine. The suite's own hook (``tests/conftest.py``) appends
-``cpu_s wall_s nodeid`` per test phase to the file named by ``ANCF_JAX_TIMING_LOG``; this
+``cpu_s wall_s trace_s lower_s compile_s nodeid`` per test to the file named by
+``ANCF_JAX_TIMING_LOG`` (logs of earlier versions hold ``cpu_s wall_s nodeid``); this
 section runs the suite with it (or reads a log a run wrote: ``--log``, with that run's
 pytest seconds ``--pytest-seconds``) and writes, per module, the tests, worker wall and
 CPU seconds (a module runs whole in one xdist worker; modules whose tests run in child
 processes, the notebooks, the sweep suite and the Exudyn cross-check, show wall seconds
-with little worker CPU), the sum over all modules and the pytest time.
+with little worker CPU), the seconds JAX spent in the worker tracing, lowering and
+compiling (XLA) its programs, the sum over all modules and the pytest time. The rest of
+a module's wall time is running the programs, Python, and waiting for child processes.
 
     python -m benchmarks.suite_time                       # runs the suite (~20 min on 2 cores)
     python -m benchmarks.suite_time --log FILE --pytest-seconds S
@@ -36,23 +39,37 @@ TOP = 15
 CHILD_SUITES = {"tests/sweep_suite.py": "tests/test_sweep.py"}
 
 
+#: JAX's seconds per test in the timing log, in its column order (tests/conftest.py)
+PHASES = ("trace_s", "lower_s", "compile_s")
+
+
 def parse_log(text: str) -> list[dict]:
-    """Per-module totals from ``cpu_s wall_s nodeid`` lines (setup, call and teardown of
-    a test are separate lines with the same id), longest worker wall first."""
+    """Per-module totals from ``cpu_s wall_s [trace_s lower_s compile_s] nodeid`` lines
+    (a test's setup, call and teardown are one line, or separate lines with the same id
+    in logs of earlier versions), longest worker wall first. ``phases`` is False for a
+    module whose lines have no JAX seconds."""
     mods: dict[str, dict] = {}
     for line in text.splitlines():
-        parts = line.split(None, 2)
-        if len(parts) < 3:
+        parts = line.split()
+        numbers = []
+        for p in parts:
+            try:
+                numbers.append(float(p))
+            except ValueError:
+                break
+        if len(numbers) not in (2, 2 + len(PHASES)) or len(parts) == len(numbers):
             continue
-        try:
-            cpu, wall = float(parts[0]), float(parts[1])
-        except ValueError:
-            continue
-        module = parts[2].split("::")[0]
-        m = mods.setdefault(module, dict(module=module, tests=set(), wall_s=0.0, cpu_s=0.0))
-        m["tests"].add(parts[2].strip())
-        m["wall_s"] += wall
-        m["cpu_s"] += cpu
+        nodeid = line.split(None, len(numbers))[-1].strip()
+        module = nodeid.split("::")[0]
+        m = mods.setdefault(module, dict(module=module, tests=set(), wall_s=0.0, cpu_s=0.0, phases=True,
+                                         **dict.fromkeys(PHASES, 0.0)))
+        m["tests"].add(nodeid)
+        m["cpu_s"] += numbers[0]
+        m["wall_s"] += numbers[1]
+        if len(numbers) == 2:
+            m["phases"] = False
+        for k, v in zip(PHASES, numbers[2:]):
+            m[k] += v
     rows = [dict(m, tests=len(m["tests"])) for m in mods.values()]
     return sorted(rows, key=lambda m: -m["wall_s"])
 
@@ -82,27 +99,38 @@ def run_suite(log: Path) -> tuple[float | None, float, str]:
 def summarize(modules: list[dict], pytest_s: float | None, **extra) -> dict:
     children = [dict(m, inside=CHILD_SUITES[m["module"]]) for m in modules if m["module"] in CHILD_SUITES]
     modules = [m for m in modules if m["module"] not in CHILD_SUITES]
+    phases = {f"worker_{k}": sum(m[k] for m in modules) for k in PHASES} \
+        if modules and all(m["phases"] for m in modules) else {}
     return dict(section="suite_time", target_s=TARGET_S, pytest_s=pytest_s, modules=modules,
                 child_suites=children, worker_wall_s=sum(m["wall_s"] for m in modules),
-                worker_cpu_s=sum(m["cpu_s"] for m in modules), tests=sum(m["tests"] for m in modules), **extra)
+                worker_cpu_s=sum(m["cpu_s"] for m in modules), tests=sum(m["tests"] for m in modules),
+                **phases, **extra)
 
 
 def markdown(d: dict) -> str:
     from .common import table
     if not d["modules"]:
         return "No test in the log.\n"
-    rows = [[m["module"], m["tests"], f"{m['wall_s']:.0f}", f"{m['cpu_s']:.0f}",
-             f"{100 * m['wall_s'] / d['worker_wall_s']:.0f} %"] for m in d["modules"][:TOP]]
+    phases = "worker_compile_s" in d  # a log with JAX's seconds (tests/conftest.py)
+
+    def row(name, tests, ms):
+        wall = sum(m["wall_s"] for m in ms)
+        out = [name, tests, f"{wall:.0f}", f"{sum(m['cpu_s'] for m in ms):.0f}"]
+        if phases:
+            out += [f"{sum(m[k] for m in ms):.0f}" for k in reversed(PHASES)]
+        return out + [f"{100 * wall / d['worker_wall_s']:.0f} %"]
+
+    rows = [row(m["module"], m["tests"], [m]) for m in d["modules"][:TOP]]
     rest = d["modules"][TOP:]
     if rest:
-        w = sum(m["wall_s"] for m in rest)
-        rows.append([f"the other {len(rest)} modules", sum(m["tests"] for m in rest), f"{w:.0f}",
-                     f"{sum(m['cpu_s'] for m in rest):.0f}", f"{100 * w / d['worker_wall_s']:.0f} %"])
-    rows.append(["all", d["tests"], f"{d['worker_wall_s']:.0f}", f"{d['worker_cpu_s']:.0f}", "100 %"])
+        rows.append(row(f"the other {len(rest)} modules", sum(m["tests"] for m in rest), rest))
+    rows.append(row("all", d["tests"], d["modules"]))
     for m in d.get("child_suites", []):
-        rows.append([f"{m['module']} (in {m['inside']}'s child process)", m["tests"], f"{m['wall_s']:.0f}",
-                     f"{m['cpu_s']:.0f}", "–"])
-    return table(["module", "tests", "worker wall [s]", "worker CPU [s]", "share"], rows)
+        rows.append(row(f"{m['module']} (in {m['inside']}'s child process)", m["tests"], [m])[:-1] + ["–"])
+    head = ["module", "tests", "worker wall [s]", "worker CPU [s]"]
+    if phases:
+        head += ["XLA compile [s]", "lowering [s]", "tracing [s]"]
+    return table(head + ["share"], rows)
 
 
 def main(argv=None):

@@ -36,6 +36,9 @@ def pytest_configure(config):
     import jax
     jax.config.update("jax_compilation_cache_dir", cache)
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 2.0)
+    if _TIMING_LOG:
+        import jax.monitoring
+        jax.monitoring.register_event_time_span_listener(_on_jax_span)
 
 
 # A module whose tests run long (fits that run one program dozens of times) declares
@@ -60,10 +63,35 @@ def _module_compiler_options(request):
         yield
 
 
-# ANCF_JAX_TIMING_LOG=FILE appends "cpu_s wall_s nodeid" per test phase (setup/call/
-# teardown) to FILE as the tests run: CPU seconds of the worker process do not depend on
-# how loaded the machine is, so the suite's cost on CI can be estimated on a busy one.
+# ANCF_JAX_TIMING_LOG=FILE appends "cpu_s wall_s trace_s lower_s compile_s nodeid" per
+# test (setup, call and teardown) to FILE as the tests run: CPU seconds of the worker
+# process do not depend on how loaded the machine is, so the suite's cost on CI can be
+# estimated on a busy one; trace, lower and compile are the seconds JAX spent in the
+# worker tracing to jaxprs, lowering to StableHLO and compiling with XLA (the time spans
+# of its jax.monitoring events, overlaps counted once: a jit traced inside another's
+# trace is in both spans; a persistent-cache hit compiles nothing), what the suite's time
+# is made of (python -m benchmarks.suite_time).
 _TIMING_LOG = os.environ.get("ANCF_JAX_TIMING_LOG")
+#: JAX's events timed in the timing log, in the log's column order
+_JAX_PHASES = ("/jax/core/compile/jaxpr_trace_duration", "/jax/core/compile/jaxpr_to_mlir_module_duration",
+               "/jax/core/compile/backend_compile_duration")
+_spans: dict = {e: [] for e in _JAX_PHASES}
+
+
+def _on_jax_span(event, start, end, **kwargs):
+    if event in _spans:
+        _spans[event].append((start, end))
+
+
+def _covered(spans) -> float:
+    """Seconds covered by the union of (start, end) spans."""
+    total, reach = 0.0, float("-inf")
+    for a, b in sorted(spans):
+        if b > reach:
+            total += b - max(a, reach)
+            reach = b
+    return total
+
 
 if _TIMING_LOG:
     import time
@@ -71,9 +99,12 @@ if _TIMING_LOG:
     @pytest.hookimpl(hookwrapper=True)
     def pytest_runtest_protocol(item, nextitem):
         c0, w0 = time.process_time(), time.perf_counter()
+        for spans in _spans.values():
+            spans.clear()
         yield
+        phases = " ".join(f"{_covered(_spans[e]):.2f}" for e in _JAX_PHASES)
         with open(_TIMING_LOG, "a") as f:
-            f.write(f"{time.process_time() - c0:.2f} {time.perf_counter() - w0:.2f} {item.nodeid}\n")
+            f.write(f"{time.process_time() - c0:.2f} {time.perf_counter() - w0:.2f} {phases} {item.nodeid}\n")
 
 
 # Each compiled XLA:CPU program keeps its code in memory maps of its own (~1,500 for an

@@ -331,3 +331,26 @@ def test_suite_time_from_a_timing_log(tmp_path, monkeypatch):
     assert "## Test suite time" in text and "| tests/test_b.py | 2 | 8 | 3 | 75 % |" in text
     assert "| all | 3 | 10 | 5 | 100 % |" in text  # the child suite's seconds are inside test_sweep.py's
     assert "| tests/sweep_suite.py (in tests/test_sweep.py's child process) | 1 | 1 | 0 | – |" in text
+    assert "XLA compile" not in text  # a log of an earlier version: no JAX seconds
+
+    # the current log: JAX's trace, lower and compile seconds per test, summed per module
+    log.write_text("1.00 2.00 0.10 0.05 0.50 tests/test_a.py::test_x\n"
+                   "3.00 3.50 0.20 0.10 1.25 tests/test_b.py::test_y[a b]\n"
+                   "0.25 4.00 1.00 0.50 2.00 tests/test_b.py::test_y[c]\n"
+                   "0.50 1.00 0.00 0.00 0.25 tests/sweep_suite.py::test_z\n1.0 2.0\n")
+    mods = suite_time.parse_log(log.read_text())
+    assert [(m["module"], m["tests"]) for m in mods] == [("tests/test_b.py", 2), ("tests/test_a.py", 1),
+                                                         ("tests/sweep_suite.py", 1)]
+    assert (mods[0]["trace_s"], mods[0]["lower_s"], mods[0]["compile_s"]) == (1.2, 0.6, 3.25)
+    suite_time.main(["--log", str(log), "--pytest-seconds", "300"])
+    d = json.loads((tmp_path / "suite_time.json").read_text())
+    assert d["worker_compile_s"] == 3.75 and d["worker_wall_s"] == 9.5
+    text = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
+    assert "| module | tests | worker wall [s] | worker CPU [s] | XLA compile [s] | lowering [s] | tracing [s] | share |" \
+        in text
+    assert "| tests/test_b.py | 2 | 8 | 3 | 3 | 1 | 1 | 79 % |" in text
+    assert "| all | 3 | 10 | 4 | 4 | 1 | 1 | 100 % |" in text
+    assert "XLA compilation 4 s, lowering 1 s, tracing 1 s" in text
+    # the hook counts overlapping spans of an event once (a jit traced inside another's trace)
+    from tests.conftest import _covered
+    assert _covered([(0.0, 2.0), (0.5, 1.0), (1.0, 3.0), (5.0, 6.0)]) == 4.0 and _covered([]) == 0.0
