@@ -215,7 +215,7 @@ def _suite_target(d):
     if "worker_compile_s" in d:
         detail += (f"; what the workers' time is made of: XLA compilation {d['worker_compile_s']:.0f} s, "
                    f"lowering {d['worker_lower_s']:.0f} s, tracing {d['worker_trace_s']:.0f} s (JAX's own "
-                   f"duration events), the rest running programs, Python and waiting for child processes")
+                   f"event time spans), the rest running programs, Python and waiting for child processes")
     if d.get("note"):
         detail += f"; {d['note']}"
     return d.get("pytest_s"), detail
