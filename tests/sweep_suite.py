@@ -299,12 +299,13 @@ def test_cli_sweep_interrupted_then_resumed(tmp_path, capsys, monkeypatch):
 
 # ---------------------------------------------------------------------------- Ray, devices
 @pytest.fixture(scope="module")
-def spawned(tmp_path_factory):
+def spawned(tmp_path_factory, request):
     """One spawned interpreter with two XLA host devices (tests/sweep_ray_case.py): the
     local backend sharded across both devices, then the sweep on a Ray cluster started
     by ``ray start --head`` (2 CPUs on this machine), reached by its address, with one
-    worker killed mid-chunk. Ray never loads into this pytest worker. Returns {case:
-    (store path, what the case returned)}."""
+    worker killed mid-chunk, where the Ray test is selected (a validation study,
+    ``-m study``: the cluster and its workers' compilations take ~80 s). Ray never loads
+    into this pytest worker. Returns {case: (store path, what the case returned)}."""
     import importlib.util
     import multiprocessing as mp
     from concurrent.futures import ProcessPoolExecutor
@@ -323,7 +324,8 @@ def spawned(tmp_path_factory):
             os.environ["XLA_FLAGS"] = old
     with pool:
         out = {"shard": (tmp / "two.zarr", shard.result())}
-        if importlib.util.find_spec("ray") is not None:  # found, not imported (docstring)
+        ray_selected = any(item.name == "test_ray_equals_local_with_a_worker_killed" for item in request.session.items)
+        if ray_selected and importlib.util.find_spec("ray") is not None:  # found, not imported (docstring)
             # chunks of one member: six chunks on two workers, so that workers run several
             out["ray"] = (tmp / "ray.zarr", pool.submit(_case, "sweep_on_ray_killing_a_worker", PARAMS,
                                                         str(tmp / "ray.zarr"), dict(KW, chunk_size=1),
@@ -338,6 +340,7 @@ def _case(name, *args):
     return getattr(cases, name)(*args)
 
 
+@pytest.mark.study
 def test_ray_equals_local_with_a_worker_killed(spawned, local_store):
     """On a running cluster reached by its address (``--address``), every member comes
     back exactly once and equals the local backend (chunks of 2 there, of 1 here). A

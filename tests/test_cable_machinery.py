@@ -483,6 +483,7 @@ def coulomb_reference():
     return lambda t: sol.sol(t)[0]
 
 
+@pytest.mark.study
 def test_friction_reversals_are_located():
     """With locate_crossings, steps are split where the sliding speed reverses
     (SlidingFriction.kinks: the friction force swings from −μN to +μN within a few
@@ -580,6 +581,7 @@ def test_newton_matrix_holds_the_friction_linearization(incline_runs):
     assert np.linalg.norm(np.asarray(reference)[row, cols] - r1) > 0.1
 
 
+@pytest.mark.study
 def test_gradients_through_friction_and_drives():
     """Derivatives through every drive kind and both parts of the friction law, forward
     mode through the implicit generalized-α steps (0.05 s, h = 1 ms), against central

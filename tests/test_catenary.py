@@ -217,6 +217,7 @@ def small_runs():
                                         spans=(2, 2), chunks=round(1 / el)) for el in (1.0, 0.5)}
 
 
+@pytest.mark.study
 def test_contact_force_against_the_fine_run_of_itself(small_runs):
     """Filtered contact force over the evaluated span against the run with half the
     elements and half the step. The convergence study of this catenary
@@ -396,6 +397,7 @@ def test_aerodynamic_uplift_shifts_the_static_balance():
     assert float(jax.grad(uplift_at)(v)) == pytest.approx(2 * c * v, rel=1e-14)
 
 
+@pytest.mark.study
 def test_two_pantographs_share_the_wire_statically():
     """Two pantographs at rest on the small catenary, 7 m apart between droppers
     (x = 6.5 and 13.5 m): each one's static balance holds (contact force = uplift −

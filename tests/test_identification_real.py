@@ -233,7 +233,7 @@ def _foreign_record(finer: Problem, sigma: float, seed: int, source: str) -> Mea
                                     source=source)
 
 
-@pytest.mark.slow  # three new compilations (runs at h = 0.5 ms and 1 ms, the fit at 1 ms)
+@pytest.mark.study  # three new compilations (runs at h = 0.5 ms and 1 ms, the fit at 1 ms)
 def test_discretization_check_catches_step_bias(plain):
     """Foreign data: the same model at a 4 × finer step (0.5 ms), 20 µm noise, fitted at
     the default 2 ms with the check on the step axis and no refinement budget. The check
@@ -262,7 +262,7 @@ def test_discretization_check_catches_step_bias(plain):
     json.dumps(d)
 
 
-@pytest.mark.slow  # three new compilations (6 elements without and with derivatives, 12 without)
+@pytest.mark.study  # three new compilations (6 elements without and with derivatives, 12 without)
 def test_discretization_refines_the_mesh_within_its_budget(plain, tmp_path, capsys):
     """Foreign data on the mesh axis: M1 at 6 elements (0.1 mm noise), fitted from 3
     elements with the check on the mesh axis and a budget of one refinement. At 3
@@ -313,7 +313,7 @@ def test_discretization_refines_the_mesh_within_its_budget(plain, tmp_path, caps
     assert f"  discretization: {cli['summary']}" in capsys.readouterr().out
 
 
-@pytest.mark.slow  # two new compilations (the other strain measures at 3 elements: values, the refit's Jacobian)
+@pytest.mark.study  # two new compilations (the other strain measures at 3 elements: values, the refit's Jacobian)
 def test_strain_measure_check_predicts_the_refit(plain, tmp_path, capsys):
     """Model form: a record made with the other strain measures (engineering axial
     strain, material curvature; the same mesh and step, 20 µm noise) fitted with the
@@ -513,7 +513,7 @@ def test_joint_fit_with_nuisance_parameters_per_record(problem, tmp_path):
 BOOTSTRAP = 8
 
 
-@pytest.mark.slow  # one new compilation (the bootstrap's vmapped batch of BOOTSTRAP)
+@pytest.mark.study  # one new compilation (the bootstrap's vmapped batch of BOOTSTRAP)
 def test_cli_bootstrap_and_profile_interval_near_a_bound(problem, curve, tmp_path, capsys):
     """Where Gauss–Newton is unreliable. The shifted, offset and scaled record of the
     fixtures with 1 mm of noise (20 × SIGMA), so that α (true 0.02 1/s) is barely
@@ -765,7 +765,7 @@ def gauge():
                                  overrides=_law_overrides(LAW))
 
 
-@pytest.mark.slow  # two new compilations (the stress output with the law's keys; the reference without)
+@pytest.mark.study  # two new compilations (the stress output with the law's keys; the reference without)
 def test_strain_rate_damping_and_EA_on_a_strain_gauge(gauge):
     """A strain gauge (M1's bending stress sigma_e1_mid, Pa, 250 Hz over 0.6 s) with
     the strain-rate damping of bending d and EA (through A) as scenario keys. First
@@ -806,7 +806,7 @@ def test_strain_rate_damping_and_EA_on_a_strain_gauge(gauge):
         assert res.estimates[res.names.index(name)] == pytest.approx(truth[name], rel=1e-6), name
 
 
-@pytest.mark.slow  # two new compilations (tip x with the law's keys; its reference without)
+@pytest.mark.study  # two new compilations (tip x with the law's keys; its reference without)
 def test_two_sensors_at_different_rates_and_spans_fitted_jointly(gauge):
     """The strain gauge (250 Hz over 0.6 s, weight 1/(0.1 MPa)²) and the tip's x (500 Hz
     over 1 s, weight 1/(0.1 mm)²) of one experiment, noise-free records of M1 rebuilt
@@ -875,7 +875,7 @@ s = { type = "sliding", joint = "slide" }
 MU = "joints.slide.friction.mu"
 
 
-@pytest.mark.slow  # two new compilations (the incline with μ as parameter; the reference without)
+@pytest.mark.study  # two new compilations (the incline with μ as parameter; the reference without)
 def test_friction_coefficient_from_a_sliding_coordinate(tmp_path):
     """μ of a sliding joint's regularized Coulomb friction (tanh) as a scenario key,
     the sliding coordinate s as the sensor. The model first against the rigid-incline

@@ -432,6 +432,7 @@ def pantograph_model():
     return m.build()
 
 
+@pytest.mark.study
 def test_gradients_of_contact_force_statistics():
     """d mean(F_n²)/d(v, k) over 0.025 s (the head pushed into the wire, contact kept),
     forward mode through the implicit steps (the search for the contact point

@@ -425,6 +425,7 @@ def test_a_spring_set_is_its_members():
     assert_matrix_is_the_jacobian(system, q, v, lam, t)
 
 
+@pytest.mark.study
 def test_the_interleaved_solver_runs_under_grad():
     """The multi-beam solver (two wires in an interleaved chain with a set of
     tension-only droppers, the set of :func:`wires_with_sets`) under jax.grad, as the

@@ -98,8 +98,17 @@ finally:
 OPTIMIZED = {"04_identification", "06_measured_record"}
 
 
+#: the notebooks executed only with the validation studies (``-m study``,
+#: ``python -m benchmarks.studies``): the identification and measured-record notebooks
+#: (the fits of tests/test_identification.py and test_identification_real.py, 47 s
+#: each) and the performance notebook (timings, 34 s); 01-03, the element and the
+#: paper's two examples, run in the default suite
+STUDIES = {"04_identification", "05_performance", "06_measured_record"}
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("script", SCRIPTS, ids=IDS)
+@pytest.mark.parametrize("script", [pytest.param(p, marks=pytest.mark.study) if p.stem in STUDIES else p
+                                    for p in SCRIPTS], ids=IDS)
 def test_notebook_runs_in_quick_mode(script, tmp_path):
     """Execute the notebook in a fresh kernel (its directory as working directory); a
     cell error fails the test with the cell and the traceback."""

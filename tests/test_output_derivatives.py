@@ -71,6 +71,7 @@ def test_scenario_derivative_key_and_refusals():
         Output("a", "stress", "beam", "sigma", derivative=1)
 
 
+@pytest.mark.study
 def test_alpha_fitted_to_an_accelerometer_record():
     """Rayleigh α of M1 (3 elements, 0.5 s, h = 2 ms) from the tip's vertical
     acceleration, noise-free record of the same discretization: recovered to 1e-6

@@ -177,6 +177,7 @@ def test_gradient_generalized_alpha_m1_rayleigh():
     np.testing.assert_allclose(np.asarray(grad), fd, rtol=1e-6)
 
 
+@pytest.mark.study
 def test_gradient_with_the_exact_newton_matrix_needs_no_refinement():
     """With the β-rate term in the Newton matrix (:meth:`System.with_rate_stiffness`, as
     the identification sets β) the matrix is the exact Jacobian of the step residual:

@@ -17,12 +17,15 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.mark.slow
-def test_sweep_suite_in_a_child_process():
+@pytest.mark.parametrize("marks", ["not study", pytest.param("study", marks=pytest.mark.study)])
+def test_sweep_suite_in_a_child_process(marks):
+    """The sweep suite's tests of the default run, or its validation studies (the Ray
+    cluster with a worker killed) with ``-m study``."""
     if __import__("importlib").util.find_spec("xarray") is None:  # found, not imported
         pytest.skip("xarray is not installed (it is in the test extra)")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
     proc = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:xdist", "-p", "no:cacheprovider",
-                           "-o", "addopts=", "tests/sweep_suite.py"], cwd=ROOT, env=env,
+                           "-o", "addopts=", "-m", marks, "tests/sweep_suite.py"], cwd=ROOT, env=env,
                           capture_output=True, text=True, timeout=1200)
     tail = (proc.stdout + proc.stderr)[-6000:]
     assert proc.returncode == 0, tail

@@ -176,6 +176,7 @@ def adaptive_runs(h1):
                            progress=False) for kind in DIFFRAX}
 
 
+@pytest.mark.study
 def test_all_integrators_agree_on_h1(rk4_study, ga_study, adaptive_runs, reference):
     """Tip of H1 every 10 ms against the reference, each to its own tolerance.
 
