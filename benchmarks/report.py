@@ -48,6 +48,8 @@ CENSUS = "kernel_census"
 PANTOGRAPH = "pantograph_catenary"
 #: written by ``python -m benchmarks.suite_time`` (not by benchmarks.run); rendered last
 SUITE = "suite_time"
+#: written by ``python -m benchmarks.suite_time --studies``; rendered after the suite
+STUDIES = "studies"
 
 
 
@@ -59,7 +61,7 @@ def _dense(options) -> bool:
 
 def load(results: Path) -> dict:
     out = {}
-    for name in SECTIONS + EXTRA + (PROFILE, CENSUS, PANTOGRAPH, SUITE):
+    for name in SECTIONS + EXTRA + (PROFILE, CENSUS, PANTOGRAPH, SUITE, STUDIES):
         p = results / f"{name}.json"
         if p.exists():
             out[name] = json.loads(p.read_text())
@@ -226,6 +228,15 @@ def sec_suite(d) -> str:
     return ("## Test suite time\n\nPer test module (each runs whole in one of the two xdist workers; "
             "setup, call and teardown of every test summed):\n\n" + markdown(d)
             + f"\n_Command: `{d.get('command', 'python -m benchmarks.suite_time')}`; "
+            f"{d.get('stamp', {}).get('date', '?')}._\n")
+
+
+def sec_studies(d) -> str:
+    from .suite_time import markdown
+    return ("## Validation studies\n\nThe tests marked `study` (outside README's test command, which CI runs): "
+            f"{d.get('summary', '?')} in {d.get('pytest_s') or 0:.0f} s of pytest, commit "
+            f"{d.get('commit') or '?'}{'; ' + d['note'] if d.get('note') else ''}.\n\n" + markdown(d)
+            + f"\n_Command: `{d.get('command', 'python -m benchmarks.suite_time --studies')}`; "
             f"{d.get('stamp', {}).get('date', '?')}._\n")
 
 
@@ -917,6 +928,8 @@ def render(results: Path | None = None, out: Path | None = None) -> Path:
         parts.append(sec_pantograph(data[PANTOGRAPH]) + "\n")
     if SUITE in data:
         parts.append(sec_suite(data[SUITE]) + "\n")
+    if STUDIES in data:
+        parts.append(sec_studies(data[STUDIES]) + "\n")
     out.write_text("".join(parts))
     return out
 

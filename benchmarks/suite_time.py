@@ -12,8 +12,16 @@ with little worker CPU), the seconds JAX spent in the worker tracing, lowering a
 compiling (XLA) its programs, the sum over all modules and the pytest time. The rest of
 a module's wall time is running the programs, Python, and waiting for child processes.
 
-    python -m benchmarks.suite_time                       # runs the suite (~20 min on 2 cores)
+    python -m benchmarks.suite_time                       # runs the suite
     python -m benchmarks.suite_time --log FILE --pytest-seconds S
+    python -m benchmarks.suite_time --studies             # runs the validation studies
+
+The validation studies (``-m study``: convergence orders, runs against finer runs of
+themselves, finite-difference gradients through whole fits, the real-data identification
+studies, three notebooks, the Ray cluster) are outside the default suite, which keeps CI
+within its time; ``--studies`` runs them with the same command and options, fails when
+one fails, and writes section ``studies`` (RESULTS.md: which commit passed them, when,
+in how long).
 """
 
 from __future__ import annotations
@@ -80,20 +88,34 @@ def _pytest_seconds(output: str) -> float | None:
     return float(found[-1]) if found else None
 
 
-def run_suite(log: Path) -> tuple[float | None, float, str]:
-    """README's test command in this checkout with a fresh compilation cache. Returns
-    (pytest's seconds, wall seconds, the summary line)."""
+def run_suite(log: Path, marks: str | None = None) -> tuple[float | None, float, str]:
+    """README's test command in this checkout with a fresh compilation cache (``marks``:
+    its ``-m`` expression instead of the default one). Returns (pytest's seconds, wall
+    seconds, the summary line)."""
     env = dict(os.environ, ANCF_JAX_TIMING_LOG=str(log))
     with tempfile.TemporaryDirectory() as cache:
         env["JAX_COMPILATION_CACHE_DIR"] = cache
         t0 = time.perf_counter()
-        proc = subprocess.run([sys.executable, "-m", "pytest", "-n", "2", "-q"], cwd=ROOT, env=env,
-                              capture_output=True, text=True)
+        proc = subprocess.run([sys.executable, "-m", "pytest", "-n", "2", "-q", *(["-m", marks] if marks else [])],
+                              cwd=ROOT, env=env, capture_output=True, text=True)
         wall = time.perf_counter() - t0
     summary = (proc.stdout.strip().splitlines() or [""])[-1]
     if proc.returncode != 0:
-        raise SystemExit(f"suite_time: the suite failed ({summary})")
+        print(proc.stdout[-8000:])
+        raise SystemExit(f"suite_time: the {'studies' if marks else 'suite'} failed ({summary})")
     return _pytest_seconds(proc.stdout), wall, summary
+
+
+def _commit() -> str | None:
+    """The checkout's commit and whether it has uncommitted changes to tracked files."""
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
+                              text=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT,
+                               capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    return head + (" with uncommitted changes" if dirty else "")
 
 
 def summarize(modules: list[dict], pytest_s: float | None, **extra) -> dict:
@@ -138,7 +160,20 @@ def main(argv=None):
     ap.add_argument("--log", type=Path, help="read this ANCF_JAX_TIMING_LOG instead of running the suite")
     ap.add_argument("--pytest-seconds", type=float, help="with --log: the seconds pytest reported for that run")
     ap.add_argument("--note", default="", help="where the run was made (kept in the JSON)")
+    ap.add_argument("--studies", action="store_true", help="run the validation studies (-m study) instead")
     args = ap.parse_args(argv)
+    if args.studies:
+        if args.log is not None:
+            ap.error("--studies runs them; --log reads a run of the default suite")
+        with tempfile.TemporaryDirectory() as tmp:
+            log = Path(tmp) / "timing.log"
+            pytest_s, wall, summary = run_suite(log, "study")
+            out = summarize(parse_log(log.read_text()), pytest_s, wall_s=wall, summary=summary, note=args.note,
+                            commit=_commit(), command="python -m benchmarks.suite_time --studies")
+        write("studies", dict(out, section="studies"))
+        print(markdown(out))
+        print(f"studies: {summary}, {pytest_s} s of pytest")
+        return
     if args.log is not None:
         if not args.log.is_file():
             ap.error(f"--log: no such file {args.log}")

@@ -371,6 +371,7 @@ def test_ray_equals_local_with_a_worker_killed(spawned, local_store):
     assert run["backend"] == "ray" and run["cpus"] == 2.0
 
 
+@pytest.mark.study
 def test_local_backend_shards_across_host_devices(spawned, local_store):
     """Two CPU host devices: each chunk is one program sharded across both; the numbers
     equal the one-device store."""

@@ -354,3 +354,17 @@ def test_suite_time_from_a_timing_log(tmp_path, monkeypatch):
     # the hook counts overlapping spans of an event once (a jit traced inside another's trace)
     from tests.conftest import _covered
     assert _covered([(0.0, 2.0), (0.5, 1.0), (1.0, 3.0), (5.0, 6.0)]) == 4.0 and _covered([]) == 0.0
+    # --studies: the tests marked study (-m study), their own section after the suite's
+
+    def studies_run(path, marks=None):
+        assert marks == "study"
+        path.write_text("2.00 30.00 0.50 0.20 10.00 tests/test_c.py::test_s\n")
+        return 31.5, 33.0, "1 passed, 5 deselected in 31.50s"
+    monkeypatch.setattr(suite_time, "run_suite", studies_run)
+    suite_time.main(["--studies", "--note", "test machine"])
+    d = json.loads((tmp_path / "studies.json").read_text())
+    assert d["section"] == "studies" and d["pytest_s"] == 31.5 and d["tests"] == 1
+    text = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
+    assert text.index("## Test suite time") < text.index("## Validation studies")
+    assert "1 passed, 5 deselected in 31.50s in 32 s of pytest" in text and "test machine" in text
+    assert "| tests/test_c.py | 1 | 30 | 2 | 10 | 0 | 0 | 100 % |" in text

@@ -6,6 +6,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 from ancf_jax import _xla, simulation
 
@@ -91,6 +92,7 @@ def m1_chunk_text(system, state):
     return simulation._chunk_single.lower(*args).as_text()
 
 
+@pytest.mark.study
 def test_loop_kernels_give_the_default_run_without_lapack_in_the_step():
     import json
     import os

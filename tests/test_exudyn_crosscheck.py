@@ -79,6 +79,7 @@ def test_to_exudyn_matches_ancf_jax(exudyn_process):
     run_case(exudyn_process, "to_exudyn_matches_ancf_jax")
 
 
+@pytest.mark.study
 def test_from_exudyn_sliding_joint_and_curved_cables(exudyn_process):
     run_case(exudyn_process, "from_exudyn_sliding_and_curved")
 
@@ -95,5 +96,6 @@ def test_from_exudyn_rigid_mechanism(exudyn_process):
     run_case(exudyn_process, "from_exudyn_rigid_mechanism")
 
 
+@pytest.mark.study
 def test_from_exudyn_formulations_and_offsets(exudyn_process):
     run_case(exudyn_process, "from_exudyn_formulations_and_offsets")

@@ -16,6 +16,7 @@ OVERRIDES = ["beams.beam.elements=3", "solver.dt=0.002", "outputs.dt=0.002",
              "solver.generalized_alpha.newton_tol=1e-12"]
 
 
+@pytest.mark.study
 def test_gradients_of_the_minimum_tip_height_equal_central_differences():
     """d min(tip_y)/d(α, m_tip) at two points, against central differences with
     relative steps 1e-4: measured agreement 1.1e-7 (α), 9e-9 (mass) relative; at steps

@@ -70,6 +70,7 @@ def test_round_trip_validates_builds_and_runs(name):
     round_trip(name)
 
 
+@pytest.mark.study
 def test_hauled_cabin_first_second():
     """The shipped hauled cabin's round trip over its first second (500 steps, the same
     program as a few steps): the energy balance with the drive's constraint work and
