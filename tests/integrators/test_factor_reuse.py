@@ -133,7 +133,7 @@ def test_memory_is_kept_by_checkpoints_and_set_by_flat_options(h1):
     system, state = h1
     solver = GeneralizedAlpha(factor_reuse=AcrossSteps(4))
     context = solver.prepare(system)
-    carry = solver.init(system, state, context)
+    carry = eqx.filter_jit(solver.init)(system, state, context)  # op by op: ~180 one-operation programs
     marked = jax.tree.map(lambda a: a + 1, carry.memory)
     leaves = tuple(np.asarray(a) for a in jax.tree.leaves(marked))
     kept = solver.resume(system, eqx.tree_at(lambda c: c.memory, carry, leaves), context)
