@@ -45,23 +45,48 @@ def flags_in_fresh_process(pre="", **env):
 
 
 def test_xla_flags_setting():
+    """In fresh interpreters (each ~3 s), that XLA accepts what is set and the process
+    computes: the defaults, a user's flag kept and in effect, loop kernels, and nothing
+    changed once a backend runs."""
     from ancf_jax import _xla
     default = " ".join(_xla.DEFAULT_FLAGS) if _xla._jaxlib_release() in _xla.TESTED_JAXLIB else None
     two = "--xla_force_host_platform_device_count=2"
     assert flags_in_fresh_process() == f"{default!r} 1"
     assert flags_in_fresh_process(XLA_FLAGS=two) == f"{(two + ' ' + default) if default else two!r} 2"
-    if default:  # the user's own value of a default flag is kept
-        mine = default.replace("=false", "=true")
-        assert mine != default and flags_in_fresh_process(XLA_FLAGS=mine) == f"{mine!r} 1"
-    assert flags_in_fresh_process(ANCF_JAX_XLA_FLAGS="off") == "None 1"      # switched off
-    if default:  # loop kernels asked for: the threshold added, a user's own extra options kept
+    if default:  # loop kernels asked for: the threshold added
         loops = f"--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold={_xla.LOOP_KERNEL_BYTES}"
         assert flags_in_fresh_process(ANCF_JAX_LOOP_KERNELS="1") == f"{default + ' ' + loops!r} 1"
-        assert flags_in_fresh_process(ANCF_JAX_LOOP_KERNELS="1", ANCF_JAX_XLA_FLAGS="off") == f"{loops!r} 1"
-        own = "--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=5000"
-        assert flags_in_fresh_process(ANCF_JAX_LOOP_KERNELS="1", XLA_FLAGS=own) == f"{own + ' ' + default!r} 1"
     # a backend started before ancf_jax is imported: nothing changed (too late to act)
     assert flags_in_fresh_process(pre="import jax; jax.devices(); ") == "None 1"
+
+
+@pytest.mark.parametrize("env, expected", [
+    ({}, "{default}"),
+    ({"XLA_FLAGS": "{mine}"}, "{mine}"),                                    # the user's own value kept
+    ({"ANCF_JAX_XLA_FLAGS": "off"}, None),                                  # switched off
+    ({"ANCF_JAX_LOOP_KERNELS": "1", "ANCF_JAX_XLA_FLAGS": "off"}, "{loops}"),
+    ({"ANCF_JAX_LOOP_KERNELS": "1", "XLA_FLAGS": "{own}"}, "{own} {default}"),  # a user's extra options kept
+])
+def test_xla_flags_composed(monkeypatch, env, expected):
+    """configure_xla_flags as at import, in this process (no backend as far as it can
+    tell): what XLA_FLAGS becomes for the user's settings."""
+    from ancf_jax import _xla
+    if _xla._jaxlib_release() not in _xla.TESTED_JAXLIB:
+        pytest.skip("the flags are added only on the measured jaxlib releases")
+    words = dict(default=" ".join(_xla.DEFAULT_FLAGS), mine=" ".join(_xla.DEFAULT_FLAGS).replace("=false", "=true"),
+                 loops=f"--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold={_xla.LOOP_KERNEL_BYTES}",
+                 own="--xla_backend_extra_options=xla_cpu_small_while_loop_byte_threshold=5000")
+    for name in ("XLA_FLAGS", _xla.ENV, _xla.LOOP_KERNELS_ENV):
+        monkeypatch.delenv(name, raising=False)
+    for name, value in env.items():
+        monkeypatch.setenv(name, value.format(**words))
+    monkeypatch.setattr(_xla, "_backend_running", lambda: False)
+    changed = _xla.configure_xla_flags()
+    if expected is None:
+        assert changed is None and "XLA_FLAGS" not in os.environ
+    else:
+        assert os.environ["XLA_FLAGS"] == expected.format(**words)
+        assert changed in (None, os.environ["XLA_FLAGS"])
 
 
 YNN_CODE = ("import ancf_jax, jax, jax.numpy as jnp; "
