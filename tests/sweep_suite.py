@@ -303,8 +303,9 @@ def spawned(tmp_path_factory, request):
     """One spawned interpreter with two XLA host devices (tests/sweep_ray_case.py): the
     local backend sharded across both devices, then the sweep on a Ray cluster started
     by ``ray start --head`` (2 CPUs on this machine), reached by its address, with one
-    worker killed mid-chunk, where the Ray test is selected (a validation study,
-    ``-m study``: the cluster and its workers' compilations take ~80 s). Ray never loads
+    worker killed mid-chunk where the Ray test is selected (both are validation
+    studies, ``-m study``: the cluster and its workers' compilations take ~80 s, the
+    spawned interpreter ~25 s). Ray never loads
     into this pytest worker. Returns {case: (store path, what the case returned)}."""
     import importlib.util
     import multiprocessing as mp

@@ -99,7 +99,7 @@ OPTIMIZED = {"04_identification", "06_measured_record"}
 
 
 #: the notebooks executed only with the validation studies (``-m study``,
-#: ``python -m benchmarks.studies``): the identification and measured-record notebooks
+#: ``python -m benchmarks.suite_time --studies``): the identification and measured-record notebooks
 #: (the fits of tests/test_identification.py and test_identification_real.py, 47 s
 #: each) and the performance notebook (timings, 34 s); 01-03, the element and the
 #: paper's two examples, run in the default suite

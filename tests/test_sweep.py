@@ -19,8 +19,9 @@ ROOT = Path(__file__).resolve().parents[1]
 @pytest.mark.slow
 @pytest.mark.parametrize("marks", ["not study", pytest.param("study", marks=pytest.mark.study)])
 def test_sweep_suite_in_a_child_process(marks):
-    """The sweep suite's tests of the default run, or its validation studies (the Ray
-    cluster with a worker killed) with ``-m study``."""
+    """The sweep suite's tests of the default run, or its validation studies (the local
+    backend sharded across two host devices, the Ray cluster with a worker killed) with
+    ``-m study``."""
     if __import__("importlib").util.find_spec("xarray") is None:  # found, not imported
         pytest.skip("xarray is not installed (it is in the test extra)")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
