@@ -234,7 +234,7 @@ def sec_suite(d) -> str:
 def sec_studies(d) -> str:
     from .suite_time import markdown
     return ("## Validation studies\n\nThe tests marked `study` (outside README's test command, which CI runs): "
-            f"{d.get('summary', '?')} in {d.get('pytest_s') or 0:.0f} s of pytest, commit "
+            f"{d.get('summary', '?')}, commit "
             f"{d.get('commit') or '?'}{'; ' + d['note'] if d.get('note') else ''}.\n\n" + markdown(d)
             + f"\n_Command: `{d.get('command', 'python -m benchmarks.suite_time --studies')}`; "
             f"{d.get('stamp', {}).get('date', '?')}._\n")

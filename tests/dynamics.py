@@ -197,3 +197,16 @@ def uneven_arc(n_elements=8, radius=1.0, half_angle=1.2):
     phi = -np.pi / 2 - half_angle + np.concatenate([[0.0], np.cumsum(steps)])
     points = np.column_stack([radius * np.cos(phi), radius + radius * np.sin(phi)])
     return mesh.through_points(points, np.column_stack([-np.sin(phi), np.cos(phi)]))
+
+
+class LazyRuns(dict):
+    """{key: run}, each run made by ``make(key)`` when a test first asks for it: a
+    module fixture holding a study's runs, of which the default suite uses a few."""
+
+    def __init__(self, make):
+        super().__init__()
+        self.make = make
+
+    def __missing__(self, key):
+        self[key] = run = self.make(key)
+        return run

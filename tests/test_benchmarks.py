@@ -366,5 +366,5 @@ def test_suite_time_from_a_timing_log(tmp_path, monkeypatch):
     assert d["section"] == "studies" and d["pytest_s"] == 31.5 and d["tests"] == 1
     text = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
     assert text.index("## Test suite time") < text.index("## Validation studies")
-    assert "1 passed, 5 deselected in 31.50s in 32 s of pytest" in text and "test machine" in text
+    assert "1 passed, 5 deselected in 31.50s, commit " in text and "test machine" in text
     assert "| tests/test_c.py | 1 | 30 | 2 | 10 | 0 | 0 | 100 % |" in text

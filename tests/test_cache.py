@@ -81,12 +81,14 @@ def test_xla_flags_composed(monkeypatch, env, expected):
     for name, value in env.items():
         monkeypatch.setenv(name, value.format(**words))
     monkeypatch.setattr(_xla, "_backend_running", lambda: False)
+    given = os.environ.get("XLA_FLAGS")
     changed = _xla.configure_xla_flags()
     if expected is None:
         assert changed is None and "XLA_FLAGS" not in os.environ
     else:
         assert os.environ["XLA_FLAGS"] == expected.format(**words)
-        assert changed in (None, os.environ["XLA_FLAGS"])
+        # None exactly when nothing had to change
+        assert changed == (None if given == os.environ["XLA_FLAGS"] else os.environ["XLA_FLAGS"])
 
 
 YNN_CODE = ("import ancf_jax, jax, jax.numpy as jnp; "

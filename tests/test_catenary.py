@@ -30,6 +30,7 @@ from ancf_jax.models.catenary import (G, WIRE_FORMULATION, CatenaryDesign, Panto
                                       pantograph_name, run_pantograph_catenary)
 
 from .beam_theory import moving_load_series
+from .dynamics import LazyRuns
 
 #: three short spans with the standard wires (shortened for speed): the middle one is
 #: evaluated, the last is the filter's margin
@@ -207,18 +208,6 @@ def test_moving_force_on_the_builders_contact_wire():
     assert errors[1] < 2e-3 and errors[0] / errors[1] > 3.0, errors
 
 
-class _Runs(dict):
-    """{element length [m]: run}, each run made when a test first asks for it."""
-
-    def __init__(self, make):
-        super().__init__()
-        self.make = make
-
-    def __missing__(self, el):
-        self[el] = run = self.make(el)
-        return run
-
-
 @pytest.fixture(scope="module")
 def small_runs():
     """The small catenary at 250 km/h: 1 m elements and 1 ms steps, and the run of
@@ -226,7 +215,7 @@ def small_runs():
     One compiled program: both wires have 60 element slots, the runs are chunks of 400
     steps with outputs at every step."""
     design = lambda el: CatenaryDesign(element_length=el, alpha=0.06, beta=7.6e-5, **RUN)  # noqa: E731
-    return _Runs(lambda el: run_pantograph_catenary(design(el), speed_kmh=250, dt=1e-3 * el, pad_to=60, t_end=0.4,
+    return LazyRuns(lambda el: run_pantograph_catenary(design(el), speed_kmh=250, dt=1e-3 * el, pad_to=60, t_end=0.4,
                                                     spans=(2, 2), chunks=round(1 / el)))
 
 

@@ -9,8 +9,6 @@ motion on the same curve computed by SciPy with the crossings as events.
 (``benchmarks/locate_crossings.py`` runs the same study through ``simulate``.)
 """
 
-import functools
-
 import jax
 import numpy as np
 import pytest
@@ -20,46 +18,46 @@ from ancf_jax.integrators.explicit import RK4
 from ancf_jax.integrators.generalized_alpha import GeneralizedAlpha
 from ancf_jax.newton import ModifiedNewton
 
-from .dynamics import curve_motion, observed_orders, run_fixed, track_model, uneven_arc
+from .dynamics import LazyRuns, curve_motion, observed_orders, run_fixed, track_model, uneven_arc
 
 S0, T_END = 0.35, 1.2  # released 0.85 rad from the bottom: 7 crossings
 STEPS = (0.02, 0.01, 0.005)  # 0.0025 adds nothing but two compilations (errors below)
 
 
-@functools.cache
-def _crossing_model():
+@pytest.fixture(scope="module")
+def crossing_runs():
+    """{(located, h [s]): the arc run with RK4 at step h, node crossings located or not}
+    as rows: error in s against the closed form, crossings located and passed, status
+    and max |Φ|; each run made when a test first asks for it (every located/step pair
+    is a compilation of its own)."""
     track = uneven_arc(8, 1.0, 1.2)
     n = int(track.n_elements)
     nodes, lengths = np.asarray(track.reference_nodes)[: n + 1], np.asarray(track.element_lengths)[:n]
     system, state = track_model(track, S0).build()
     phi = jax.jit(jax.vmap(lambda sy, q: sy.constraint(q), in_axes=(None, 0)))
-    return system, state, nodes, lengths, phi
 
-
-@functools.cache
-def crossing_run(locate: bool, h: float) -> dict:
-    """The arc run with RK4 at step h [s], node crossings located or not: its error in s
-    against the closed form, crossings located and passed, status and max |Φ|."""
-    system, state, nodes, lengths, phi = _crossing_model()
-    options = RunOptions(locate_crossings=locate, max_halvings=0)
-    run = run_fixed(system, state, RK4(), h, T_END, chunk=10, options=options)
-    ref, crossings = curve_motion(nodes, lengths, S0, 0.0, run.t)
-    s = run.q[:, system.sliding_offset]
-    return dict(error=np.max(np.abs(s - ref[:, 0])), located=int(run.crossings.sum()), crossings=len(crossings),
-                status=run.status, drift=float(np.max(np.abs(phi(system, run.q)))))
+    def row(key):
+        locate, h = key
+        run = run_fixed(system, state, RK4(), h, T_END, chunk=10,
+                        options=RunOptions(locate_crossings=locate, max_halvings=0))
+        ref, crossings = curve_motion(nodes, lengths, S0, 0.0, run.t)
+        s = run.q[:, system.sliding_offset]
+        return dict(error=np.max(np.abs(s - ref[:, 0])), located=int(run.crossings.sum()), crossings=len(crossings),
+                    status=run.status, drift=float(np.max(np.abs(phi(system, run.q)))))
+    return LazyRuns(row)
 
 
 @pytest.fixture(scope="module")
-def crossing_study():
+def crossing_study(crossing_runs):
     """{located: rows at STEPS} (a validation study: six compilations)."""
-    return {locate: [crossing_run(locate, h) for h in STEPS] for locate in (False, True)}
+    return {locate: [crossing_runs[locate, h] for h in STEPS] for locate in (False, True)}
 
 
-def test_located_crossings_meet_the_closed_form():
+def test_located_crossings_meet_the_closed_form(crossing_runs):
     """At h = 10 ms (the order study below measures the rest): the seven crossings
     located, the error 1.1e-8 (measured; bound 3e-8), 90 times smaller than without
     locating them (9.9e-7), and the constraint kept at round-off in both runs."""
-    located, plain = crossing_run(True, 0.01), crossing_run(False, 0.01)
+    located, plain = crossing_runs[True, 0.01], crossing_runs[False, 0.01]
     assert located["status"] == 0 == plain["status"]
     assert located["located"] == located["crossings"] == 7 and plain["located"] == 0
     assert located["error"] < 3e-8 and plain["error"] > 30.0 * located["error"], (located, plain)
