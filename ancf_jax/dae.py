@@ -261,11 +261,13 @@ def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac, load_fa
                           InexactNewtonMatrixWarning, stacklevel=2)
     chain = None
     if system.chain_size:
-        parts = []
-        for i, b in enumerate(system.beams):
-            nodes, vel = system.beam_nodes(q, i), system.beam_nodes(v, i)
+        def beam_block(b, nodes, vel):
             k = BlockTridiagonal.from_element_matrices(b.element_tangent(nodes, vel, gamma_p))
-            parts.append(b.mass().scale(beta_p + b.alpha * gamma_p) + k)
+            return b.mass().scale(beta_p + b.alpha * gamma_p) + k
+
+        beams = range(len(system.beams))
+        parts = system.map_beams(beam_block, [system.beam_nodes(q, i) for i in beams],
+                                 [system.beam_nodes(v, i) for i in beams])
         chain = system.layout.assemble(parts)
         if system.banded_forces:
             position = np.argsort(solver_permutation(system))  # q index → solver row

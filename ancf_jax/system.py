@@ -15,6 +15,10 @@ elastic forces (−∂U/∂q, Eq. 9), gravity, applied loads and the damping for
 product of the elastic force). Φ_q and γ (Eq. 12) come from automatic differentiation
 of the joint residuals.
 
+Like beams (one structure and array shapes: the wires of a catenary) are evaluated
+together, stacked and vectorized (:meth:`System.map_beams`): their element code is
+traced and compiled once per group, not once per beam.
+
 A :class:`System` is an ``equinox.Module``: ``jit``, ``vmap`` and ``grad`` pass through
 it. Everything a batch may vary (lengths, masses, α, β, node indices) is array data;
 the structure (counts, offsets, names) is static.
@@ -27,10 +31,15 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from . import _products
 from ._control import traced_once
 from .beam import Beam
 from .bodies import RigidBodies
 from .linalg import AbstractChainLayout, BlockTridiagonal, SequentialChain
+
+
+def _stack(*xs):
+    return jnp.stack(xs)
 
 
 class State(eqx.Module):
@@ -227,8 +236,8 @@ class System(eqx.Module):
 
     def strain_energy(self, q):
         """Σ U of all beams [J] (Eq. 8)."""
-        return sum((b.strain_energy(self.beam_nodes(q, i)) for i, b in enumerate(self.beams)),
-                   jnp.zeros(()))
+        return sum(self.map_beams(lambda b, nodes: b.strain_energy(nodes),
+                                  [self.beam_nodes(q, i) for i in range(len(self.beams))]), jnp.zeros(()))
 
     def gravity_load(self):
         """Generalized gravity force (constant), shape (n,); zero on the items named in
@@ -270,25 +279,65 @@ class System(eqx.Module):
         """−∂V/∂q of the total potential (elastic Eq. 9, gravity, springs), shape (n,)."""
         return -jax.grad(self.potential_energy)(q, t, load_factor)
 
+    def beam_groups(self) -> tuple[tuple[int, ...], ...]:
+        """The beams in groups of like beams (static): equal structure (element, laws,
+        formulation, static settings) and equal array shapes, e.g. the two wires of a
+        catenary padded to one node count. :meth:`map_beams` evaluates a group in one
+        vectorized evaluation, so its element code is traced and compiled once."""
+        groups: dict = {}
+        for i, b in enumerate(self.beams):
+            leaves, treedef = jax.tree.flatten(b)
+            if not all(isinstance(x, (jax.Array, np.ndarray)) for x in leaves):
+                groups[("alone", i)] = [i]
+                continue
+            key = (treedef, tuple((x.shape, np.dtype(x.dtype)) for x in leaves))
+            groups.setdefault(key, []).append(i)
+        return tuple(tuple(g) for g in groups.values())
+
+    def map_beams(self, fn, *per_beam):
+        """``[fn(beam_b, *(a[b] for a in per_beam)) for every beam b]``, with the beams of a
+        group of like beams (:meth:`beam_groups`) stacked and ``fn`` vectorized over
+        them (``jax.vmap``): one traced evaluation per group. ``per_beam``: sequences
+        of one array (or pytree) per beam; ``fn`` returns a pytree of arrays."""
+        out = [None] * len(self.beams)
+        for group in self.beam_groups():
+            if len(group) == 1:
+                b = group[0]
+                out[b] = fn(self.beams[b], *(a[b] for a in per_beam))
+                continue
+            beams = jax.tree.map(_stack, *(self.beams[b] for b in group))
+            args = [jax.tree.map(_stack, *(a[b] for b in group)) for a in per_beam]
+            with _products.batch(len(group)):
+                res = jax.vmap(fn)(beams, *args)
+            for k, b in enumerate(group):
+                out[b] = jax.tree.map(lambda x: x[k], res)
+        return out
+
     @traced_once
     def _beam_forces(self, q, v):
         """Elastic forces −∂U/∂q and Rayleigh forces −(αM + βK)v of all beams, in one
         linearization of the elastic force per beam: ``jax.jvp`` of −∂U/∂e along the
         nodal velocities returns the force (primal) and −K v (tangent) together; plus the
-        rate parts of material laws (:meth:`ancf_jax.beam.Beam.dissipative_force`)."""
-        elastic = jnp.zeros_like(q)
-        damping = jnp.zeros_like(q)
-        for i, b in enumerate(self.beams):
-            nodes, vel = self.beam_nodes(q, i), self.beam_nodes(v, i)
+        rate parts of material laws (:meth:`ancf_jax.beam.Beam.dissipative_force`). Like
+        beams are evaluated together (:meth:`map_beams`)."""
+        def one(b, nodes, vel):
             f, minus_kv = jax.jvp(b.elastic_force, (nodes,), (vel,))
             m_v = b.mass().add_diagonal(-jnp.repeat(
                 jnp.where(b.mesh.active_nodes, 0.0, 1.0), 4)).matvec(jnp.reshape(vel, (-1,)))
-            o = self.beam_offset(i)
-            sl = slice(o, o + b.n_coordinates)
-            damping = damping.at[sl].add(-b.alpha * m_v + b.beta * jnp.reshape(minus_kv, (-1,)))
+            d = -b.alpha * m_v + b.beta * jnp.reshape(minus_kv, (-1,))
             if b.has_rate_law:  # rate parts of material laws (a dissipation)
-                damping = damping.at[sl].add(jnp.reshape(b.dissipative_force(nodes, vel), (-1,)))
-            elastic = elastic.at[sl].add(jnp.reshape(f, (-1,)))
+                d = d + jnp.reshape(b.dissipative_force(nodes, vel), (-1,))
+            return jnp.reshape(f, (-1,)), d
+
+        parts = self.map_beams(one, [self.beam_nodes(q, i) for i in range(len(self.beams))],
+                               [self.beam_nodes(v, i) for i in range(len(self.beams))])
+        elastic = jnp.zeros_like(q)
+        damping = jnp.zeros_like(q)
+        for i, (f, d) in enumerate(parts):
+            o = self.beam_offset(i)
+            sl = slice(o, o + self.beams[i].n_coordinates)
+            damping = damping.at[sl].add(d)
+            elastic = elastic.at[sl].add(f)
         return elastic, damping
 
     def damping_force(self, q, v):

@@ -456,3 +456,64 @@ def test_the_interleaved_solver_runs_under_grad():
     assert int(s0) == int(sp) == int(sm) == 0
     fd = (float(yp) - float(ym)) / (2 * e)
     assert abs(float(g) - fd) < 1e-5 * abs(fd) and abs(fd) > 1e-8, (float(g), fd)
+
+
+def wires_in_groups(count=3):
+    """``count`` pinned 4 m wires 1 m apart: the first two alike (8 elements each, other
+    α and β: one group of like beams), the third of 6 elements (a group of its own)."""
+    from ancf_jax import mesh
+    from ancf_jax.model import Model, node
+    from ancf_jax.section import Section
+    m = Model(gravity=(0.0, -9.81))
+    section = Section.from_stiffness(1e5, 10.0, 1.0)
+    for name, y, n, alpha, beta in (("a", 0.0, 8, 0.3, 1e-4), ("b", 1.0, 8, 0.7, 3e-4),
+                                    ("c", 2.0, 6, 0.5, 2e-4))[:count]:
+        m.add_beam(name, mesh.straight((0, y), (1, 0), 4.0, n), section, alpha=alpha, beta=beta)
+        m.pin(f"{name}.start", node(name, 0))
+        m.pin(f"{name}.end", node(name, -1))
+    return m.build(assemble=False)
+
+
+def test_like_beams_are_evaluated_together():
+    """Beams of one structure and shapes are stacked and evaluated in one vectorized
+    evaluation (:meth:`~ancf_jax.system.System.map_beams`): forces, strain energy and
+    the Newton matrix's beam blocks equal those of each beam evaluated alone (its own
+    α, β and nodes: a mix-up within the group would show), and the program holds the
+    element code once per group: the beam forces of two like beams lower to under 1.5
+    times the StableHLO of one beam's (measured 1.17; evaluated beam by beam 1.93)."""
+    from ancf_jax.linalg import BlockTridiagonal
+    system, state = wires_in_groups()
+    assert system.beam_groups() == ((0, 1), (2,))
+    q, v, lam = perturbed(system, state, 1)
+    beta_p, gamma_p = 3.7e5, 1.1e3
+
+    @eqx.filter_jit
+    def grouped(system, q, v, lam):
+        a = dae.iteration_matrix(system, q, v, lam, 0.1, beta_p, gamma_p, system.constraint_jacobian(q, 0.1))
+        return system._beam_forces(q, v), system.strain_energy(q), a.chain
+
+    @eqx.filter_jit
+    def alone(system, q, v):
+        elastic, damping, energy, blocks = jnp.zeros_like(q), jnp.zeros_like(q), 0.0, []
+        for i, b in enumerate(system.beams):
+            nodes, vel = system.beam_nodes(q, i), system.beam_nodes(v, i)
+            f, minus_kv = jax.jvp(b.elastic_force, (nodes,), (vel,))
+            sl = slice(system.beam_offset(i), system.beam_offset(i) + b.n_coordinates)
+            elastic = elastic.at[sl].set(f.ravel())
+            damping = damping.at[sl].set(-b.alpha * b.mass().matvec(vel.ravel()) + b.beta * minus_kv.ravel())
+            energy = energy + b.strain_energy(nodes)
+            blocks.append(b.mass().scale(beta_p + b.alpha * gamma_p)
+                          + BlockTridiagonal.from_element_matrices(b.element_tangent(nodes, vel, gamma_p)))
+        return (elastic, damping), energy, system.layout.assemble(blocks)
+
+    got, ref = grouped(system, q, v, lam), alone(system, q, v)
+    for g, r in zip(jax.tree.leaves(got), jax.tree.leaves(ref)):
+        np.testing.assert_allclose(g, r, rtol=1e-13, atol=1e-13 * float(jnp.max(jnp.abs(r))))
+
+    def lines(s):
+        z = jnp.zeros(s.n_coordinates)
+        return eqx.filter_jit(lambda s, q, v: s._beam_forces(q, v)).lower(s, z, z).as_text().count("\n")
+
+    two, one = wires_in_groups(2)[0], wires_in_groups(1)[0]
+    assert two.beam_groups() == ((0, 1),)
+    assert lines(two) < 1.5 * lines(one), (lines(two), lines(one))
