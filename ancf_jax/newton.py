@@ -49,8 +49,8 @@ class NewtonSolution(eqx.Module):
         x: the last iterate.
         iterations: Newton iterations taken (int).
         converged: whether the stopping rule was met (bool).
-        residual_norm: ``residual_norm`` of the last residual evaluated (NaN when the
-            solve was given no norm).
+        residual_norm: ``residual_norm`` of the residual at ``x``, the iterate returned
+            (NaN when the solve was given no norm).
         factors: the factors of the Newton matrix in use at the end (only when the
             solve was given ``factors``; else None).
         factorizations: factorizations the solve made (int; only with ``factors``).
@@ -135,7 +135,10 @@ class ModifiedNewton(eqx.Module):
                 (the beam mass of a projection).
             scale: scale of the unknowns for the step tolerance (may be traced).
             residual_norm: F ↦ scalar, for ``residual_tolerance`` and
-                ``max_backtracks`` (non-finite norm: retreat).
+                ``max_backtracks`` (non-finite norm: retreat), and reported at the
+                iterate returned: the loop makes one more pass, which evaluates the
+                residual there and changes nothing (one residual in the program, not
+                a second copy after the loop).
             factors: factors of an approximation of the Newton matrix to start with
                 (a pytree as ``linear_solver.init`` returns; None: factor at x0).
             refresh: with ``factors``: factor at x0 instead (bool, may be traced).
@@ -158,8 +161,12 @@ class ModifiedNewton(eqx.Module):
             refresh0 = jnp.array(True)
         guarded = residual_norm is not None
 
-        def cond(c):
+        def going(c):
             return (~c["done"]) & (c["it"] < self.max_iterations) & (c["back"] <= self.max_backtracks)
+
+        def cond(c):
+            # guarded: a last pass evaluates the residual at the iterate returned
+            return ~c["final"] if guarded else going(c)
 
         def body(c):
             x = c["x"]
@@ -169,11 +176,12 @@ class ModifiedNewton(eqx.Module):
                 rn = residual_norm(r)
                 ok = jnp.isfinite(rn)
                 out["rn"] = rn
+                last = ~going(c)  # the last pass: the residual at x only
             else:
                 ok = jnp.array(True)
             # the matrix is factored inside the loop (first iteration and refreshes), so
             # the factorization is traced and compiled once
-            fresh = c["refresh"] & ok
+            fresh = c["refresh"] & ok & ~last if guarded else c["refresh"] & ok
             fac = run_if(fresh, lambda _: factor(x), c["fac"])
             out["nf"] = c["nf"] + fresh.astype(jnp.int32)
             dx = self.linear_solver.compute(fac, -r)
@@ -197,11 +205,16 @@ class ModifiedNewton(eqx.Module):
                 err = jnp.where(ok, err, c["err"])
                 fac = jax.tree.map(lambda f, g: jnp.where(ok, f, g), fac, c["fac"])
             out.update(x=x_new, fac=fac, done=done, err=err, refresh=refresh)
+            if guarded:
+                out = jax.tree.map(lambda a, b: jnp.where(last, a, b), dict(c, rn=rn, final=True),
+                                   dict(out, final=jnp.array(False)))
             return out
 
         zero = jnp.zeros((), jnp.int32)
         init = dict(x=x0, fac=fac0, it=zero, done=jnp.array(False), err=jnp.array(jnp.inf),
                     refresh=refresh0, rn=jnp.array(jnp.nan), back=zero, nf=zero)
+        if guarded:
+            init["final"] = jnp.array(False)
         if guarded and self.max_backtracks:
             init.update(x_good=x0, dx=jnp.zeros_like(x0), a=jnp.array(1.0))
         # batched (under vmap) wherever x0 is from the first pass (_control.reached_by);

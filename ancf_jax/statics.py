@@ -201,9 +201,8 @@ def _solve(system: System, q0, lam0, t, load_factors, root_finder: ModifiedNewto
                                 scale=lscale, residual_norm=norm)
         ok = sol.converged & ~failed
         y_out = jnp.where(ok, sol.x, y)
-        # the residual at the iterate returned (the root finder's is that of the iterate
-        # before its last correction)
-        return (y_out, failed | ~ok), (sol.iterations, norm(residual(sol.x, lf)), ok)
+        # sol.residual_norm: at the iterate returned (the root finder's last pass)
+        return (y_out, failed | ~ok), (sol.iterations, sol.residual_norm, ok)
 
     y0 = dae.to_solver_order(system, q0, lam0)
     (y, _), (its, res, ok) = jax.lax.scan(load_step, (y0, jnp.array(False)), load_factors)

@@ -92,6 +92,27 @@ def test_non_finite_residual_is_retreated_from():
     np.testing.assert_allclose(good.x, a, rtol=1e-10)
 
 
+def test_residual_norm_is_that_of_the_iterate_returned():
+    """Given a residual norm, the solve reports the norm at the iterate it returns (a
+    last pass evaluates it there and moves nothing): the norm of F(x) evaluated apart,
+    with the iterates and iteration counts of the solve without a norm, for a solve
+    that converges and one stopped by its iteration cap (the residual before the last
+    correction, reported before, is 20 times larger there)."""
+    norm = lambda r: jnp.max(jnp.abs(r))  # noqa: E731
+    x0 = jnp.full(N, 1.5)
+    for newton, converged in ((ModifiedNewton(tolerance=1e-13, contraction=0.0, max_iterations=50), True),
+                              (ModifiedNewton(tolerance=1e-30, contraction=0.0, max_iterations=2), False)):
+        guarded = jax.jit(lambda x: newton.solve(residual, linearize, x, size=N, residual_norm=norm))(x0)
+        plain = jax.jit(lambda x: newton.solve(residual, linearize, x, size=N))(x0)
+        assert bool(guarded.converged) == converged == bool(plain.converged)
+        assert int(guarded.iterations) == int(plain.iterations)
+        np.testing.assert_array_equal(guarded.x, plain.x)
+        np.testing.assert_allclose(guarded.residual_norm, norm(residual(guarded.x)), rtol=1e-12, atol=1e-15)
+    before = jax.jit(lambda x: ModifiedNewton(tolerance=1e-30, contraction=0.0, max_iterations=1).solve(
+        residual, linearize, x, size=N))(x0).x
+    assert float(norm(residual(before))) > 10 * float(guarded.residual_norm)
+
+
 @pytest.mark.parametrize("matrix, refinement", [("exact", 0), ("approximate", 12)])
 def test_implicit_derivative_is_the_implicit_function_theorem(root, matrix, refinement):
     """d x*/d c of the root: (∂F/∂x)⁻¹ (the custom JVP), against the closed form. The
