@@ -54,7 +54,7 @@ from .errors import ModelError
 from .failures import Failure
 from .forces import has_kinks, has_node_crossings, kink_values, node_crossing_values
 from .integrators.base import AbstractIntegrator, Carry, StepInfo, select_carry
-from ._control import reached_by, run_if, traced_once
+from ._control import reached_by, traced_once
 from .joints import SlidingJoint
 from .system import State, System
 from .validation import check_count, check_positive
@@ -286,16 +286,29 @@ def adaptive_failure(result):
     return code
 
 
-def _crossing(system, integrator, carry, new, h, context, options):
-    """Split a step at the first node crossing of a sliding joint or kink of a force
-    law (see module doc).
-
-    Returns (carry, StepInfo, crossed) for the completed step of size h."""
+def _located(system, options):
+    """(sliding joints' beams, kinks located, node crossings of loads located) of the
+    crossing search (module doc); all empty/False: nothing is located."""
     slides = sliding_beams(system) if options.locate_crossings else {}
     kinked = options.locate_crossings and has_kinks(system)
     nodes_of_loads = options.locate_load_nodes and has_node_crossings(system)
-    if not (slides or kinked or nodes_of_loads):
-        return new, None, jnp.array(False)
+    return slides, kinked, nodes_of_loads
+
+
+def _located_step(system, integrator, carry, h, context, options):
+    """One step of size h (with retries in substeps where ``options.max_halvings`` > 0,
+    as :func:`_step_with_retries`), split at the first node crossing of a sliding joint
+    or kink of a force law (module doc) that it straddles.
+
+    One while loop holds the only copy of the integrator's step in the compiled program
+    (a loop for the retries and another for the crossing, each with its step, doubled
+    the program): every pass takes one step, from the start of the step or the last
+    good substep (the step and its retries), then, where the completed step straddles a
+    crossing, from the start with the regula-falsi fractions θh and the two substeps θh
+    and (1 − θ)h.
+
+    Returns (carry, StepInfo, crossed) for the completed step of size h."""
+    slides, kinked, nodes_of_loads = _located(system, options)
     js = list(slides)
 
     def values(c):
@@ -306,79 +319,116 @@ def _crossing(system, integrator, carry, new, h, context, options):
         parts += [node_crossing_values(system, c.q, c.v, c.t)] if nodes_of_loads else []
         return jnp.concatenate(parts)
 
-    g0, g1 = values(carry), values(new)
-    targets, crossings, kinks = [], [], []
-    if js:
-        s0, s1 = g0[:len(js)], g1[:len(js)]
-        k0 = jnp.stack([system.beams[slides[j]].mesh.locate(s0[i])[0] for i, j in enumerate(js)])
-        k1 = jnp.stack([system.beams[slides[j]].mesh.locate(s1[i])[0] for i, j in enumerate(js)])
-        nodes = jnp.stack([system.beams[slides[j]].mesh.node_arc_lengths[
-            jnp.where(k1[i] > k0[i], k0[i] + 1, k0[i])] for i, j in enumerate(js)])
-        lengths = jnp.stack([system.beams[slides[j]].mesh.element_lengths[k0[i]] for i, j in enumerate(js)])
-        targets.append(nodes + jnp.sign(s1 - s0) * 1e-9 * lengths)
-        crossings.append(k0 != k1)
-        kinks.append(jnp.zeros(len(js), bool))
-    if kinked or nodes_of_loads:
-        # kinks and node crossings of moving loads alike
-        e0, e1 = g0[len(js):], g1[len(js):]
-        # just before the kink (KINK_MARGIN): the first substep ends on the side where
-        # the law is smooth; the second straddles the kink by that margin. A value
-        # exactly zero at the start (a rope just taut) is no crossing.
-        targets.append(-jnp.sign(e1) * KINK_MARGIN * jnp.abs(e1 - e0))
-        crossings.append(e0 * e1 < 0.0)
-        kinks.append(jnp.ones(e0.shape, bool))
-    target, crossed = jnp.concatenate(targets), jnp.concatenate(crossings)
-    before_kink = jnp.concatenate(kinks)
-    theta_lin = jnp.clip((target - g0) / jnp.where(g1 != g0, g1 - g0, 1.0), 0.0, 1.0)
-    first = jnp.argmin(jnp.where(crossed, theta_lin, 2.0))
+    def crossing(g0, g1):
+        """(target values, crossed, before a kink) of the watched values over a step."""
+        targets, crossings, kinks = [], [], []
+        if js:
+            s0, s1 = g0[:len(js)], g1[:len(js)]
+            k0 = jnp.stack([system.beams[slides[j]].mesh.locate(s0[i])[0] for i, j in enumerate(js)])
+            k1 = jnp.stack([system.beams[slides[j]].mesh.locate(s1[i])[0] for i, j in enumerate(js)])
+            nodes = jnp.stack([system.beams[slides[j]].mesh.node_arc_lengths[
+                jnp.where(k1[i] > k0[i], k0[i] + 1, k0[i])] for i, j in enumerate(js)])
+            lengths = jnp.stack([system.beams[slides[j]].mesh.element_lengths[k0[i]] for i, j in enumerate(js)])
+            targets.append(nodes + jnp.sign(s1 - s0) * 1e-9 * lengths)
+            crossings.append(k0 != k1)
+            kinks.append(jnp.zeros(len(js), bool))
+        if kinked or nodes_of_loads:
+            # kinks and node crossings of moving loads alike
+            e0, e1 = g0[len(js):], g1[len(js):]
+            # just before the kink (KINK_MARGIN): the first substep ends on the side where
+            # the law is smooth; the second straddles the kink by that margin. A value
+            # exactly zero at the start (a rope just taut) is no crossing.
+            targets.append(-jnp.sign(e1) * KINK_MARGIN * jnp.abs(e1 - e0))
+            crossings.append(e0 * e1 < 0.0)
+            kinks.append(jnp.ones(e0.shape, bool))
+        return jnp.concatenate(targets), jnp.concatenate(crossings), jnp.concatenate(kinks)
 
-    def s_of(c):
-        return values(c)[first]
+    n_iter = options.crossing_iterations
+    retries = options.max_halvings > 0
+    h_min = h / 2.0**options.max_halvings
+    g0 = values(carry)
+    zero = jnp.zeros((), jnp.asarray(h).dtype)
+    zi = jnp.zeros((), jnp.int32)
+    yes, no = jnp.array(True), jnp.array(False)
+    # phase 0: the step and its retries; 1: the crossing's search and substeps; 2: done
+    init = dict(phase=zi, c=carry, first=carry, g_c=g0, g_first=g0, done=zero, h_try=h + zero, attempt=zi,
+                iters=zi, step=carry, step_iters=zi, step_conv=yes, crossed=no,
+                idx=zi, tgt=zero, before=no, k=zi, a=zero, b=zero + 1.0, fa=zero, fb=zero, side=zi,
+                theta=zero + 0.5, mid=carry, out=carry, sub_iters=zi, sub_conv=yes)
 
-    def branch():
-        tgt = target[first]
-
+    def body(st):
+        searching = st["phase"] == 1
+        k = st["k"]
+        bracketing = k < n_iter
+        second = k > n_iter
+        a, b, fa, fb, side = st["a"], st["b"], st["fa"], st["fb"], st["side"]
         # Illinois regula falsi on θ ∈ (0, 1) (f(0) and f(1) bracket the root), then the
-        # two substeps θh and (1 − θ)h, all in one loop: the integrator's step is traced
-        # and compiled once here instead of twice
-        fa, fb = g0[first] - tgt, g1[first] - tgt
-        n_iter = options.crossing_iterations
+        # best end of the bracket (for a kink: the end before it, a, see above) and the
+        # two substeps θh and (1 − θ)h
+        theta_rf = jnp.clip((a * fb - b * fa) / jnp.where(fb != fa, fb - fa, 1.0), 1e-6, 1 - 1e-6)
+        theta_best = jnp.clip(jnp.where((jnp.abs(fa) < jnp.abs(fb)) | st["before"], a, b), 1e-6, 1.0 - 1e-6)
+        theta = jnp.where(bracketing, theta_rf, jnp.where(k == n_iter, theta_best, st["theta"]))
+        start = select_carry(searching, select_carry(second, st["mid"], carry), st["c"])
+        dt = jnp.where(searching, jnp.where(second, 1.0 - theta, theta) * h,
+                       jnp.minimum(st["h_try"], h - st["done"]))
+        new, info = integrator.step(system, start, dt, context)
+        g_new = values(new)
+        out = dict(st)
 
-        def body(k, st):
-            a, b, fa, fb, side, theta, mid, out, iters, conv = st
-            bracketing = k < n_iter
-            theta_rf = jnp.clip((a * fb - b * fa) / jnp.where(fb != fa, fb - fa, 1.0), 1e-6, 1 - 1e-6)
-            # after the bracketing iterations: the best end of the bracket
-            # (for a kink: the end before it, a, see above)
-            theta_best = jnp.clip(jnp.where((jnp.abs(fa) < jnp.abs(fb)) | before_kink[first], a, b),
-                                  1e-6, 1.0 - 1e-6)
-            theta = jnp.where(bracketing, theta_rf, jnp.where(k == n_iter, theta_best, theta))
-            second = k > n_iter
-            start = jax.tree.map(lambda m, c: jnp.where(second, m, c), mid, carry)
-            c, info = integrator.step(system, start, jnp.where(second, 1.0 - theta, theta) * h, context)
-            ft = s_of(c) - tgt
-            same_b = jnp.sign(ft) == jnp.sign(fb)
-            a2, fa2 = jnp.where(same_b, a, theta), jnp.where(same_b, fa, ft)
-            b2, fb2 = jnp.where(same_b, theta, b), jnp.where(same_b, ft, fb)
-            fa2 = jnp.where(same_b & (side == 1), 0.5 * fa2, fa2)
-            fb2 = jnp.where(~same_b & (side == -1), 0.5 * fb2, fb2)
-            keep = lambda new, old: jnp.where(bracketing, new, old)  # noqa: E731
-            sub = ~bracketing
-            return (keep(a2, a), keep(b2, b), keep(fa2, fa), keep(fb2, fb),
-                    keep(jnp.where(same_b, 1, -1), side), theta,
-                    jax.tree.map(lambda x, m: jnp.where(k == n_iter, x, m), c, mid),
-                    jax.tree.map(lambda x, o: jnp.where(second, x, o), c, out),
-                    iters + jnp.where(sub, info.iterations, 0).astype(jnp.int32),
-                    conv & (~sub | info.converged))
+        # phase 0: the step, redone in substeps after a failure (_step_with_retries)
+        good = step_rejected(system, st["c"], new, info.converged, options) == Failure.OK
+        stepping = st["phase"] == 0
+        keep0 = lambda x, old: jnp.where(stepping, x, old)  # noqa: E731
+        first_try = stepping & (st["attempt"] == 0)
+        taken = stepping & good
+        out.update(first=select_carry(first_try, new, st["first"]), g_first=jnp.where(first_try, g_new, st["g_first"]),
+                   c=select_carry(taken, new, st["c"]), g_c=jnp.where(taken, g_new, st["g_c"]),
+                   done=jnp.where(taken, st["done"] + dt, st["done"]),
+                   h_try=keep0(jnp.where(good, jnp.minimum(2.0 * st["h_try"], h), 0.5 * st["h_try"]), st["h_try"]),
+                   iters=keep0(st["iters"] + info.iterations, st["iters"]), attempt=keep0(st["attempt"] + 1, st["attempt"]))
+        ok = good | (0.5 * st["h_try"] >= h_min * (1.0 - 1e-12))
+        completed = out["done"] >= h * (1.0 - 1e-12)
+        ended = stepping & ~(ok & ~completed)
+        # the step (as _step_with_retries returns it) and where it straddles a crossing
+        step = select_carry(completed, out["c"], out["first"])
+        g1 = jnp.where(completed, out["g_c"], out["g_first"])
+        target, crossed, before = crossing(g0, g1)
+        idx = jnp.argmin(jnp.where(crossed, jnp.clip((target - g0) / jnp.where(g1 != g0, g1 - g0, 1.0), 0.0, 1.0),
+                                   2.0)).astype(jnp.int32)
+        tgt = target[idx]
+        keep_e = lambda x, old: jnp.where(ended, x, old)  # noqa: E731
+        out.update(step=select_carry(ended, step, st["step"]), step_iters=keep_e(out["iters"], st["step_iters"]),
+                   step_conv=keep_e(completed if retries else info.converged, st["step_conv"]),
+                   crossed=keep_e(jnp.any(crossed), st["crossed"]), idx=keep_e(idx, st["idx"]),
+                   tgt=keep_e(tgt, st["tgt"]), before=keep_e(before[idx], st["before"]),
+                   fa=keep_e(g0[idx] - tgt, fa), fb=keep_e(g1[idx] - tgt, fb))
 
-        init = (jnp.array(0.0), jnp.array(1.0), fa, fb, jnp.array(0), jnp.array(0.5), carry, carry,
-                jnp.zeros((), jnp.int32), jnp.array(True))
-        st = jax.lax.fori_loop(0, n_iter + 2, body, init)
-        return st[7], st[8], st[9]
+        # phase 1: the crossing's search and substeps
+        ft = g_new[st["idx"]] - st["tgt"]
+        same_b = jnp.sign(ft) == jnp.sign(fb)
+        a2, fa2 = jnp.where(same_b, a, theta), jnp.where(same_b, fa, ft)
+        b2, fb2 = jnp.where(same_b, theta, b), jnp.where(same_b, ft, fb)
+        fa2 = jnp.where(same_b & (side == 1), 0.5 * fa2, fa2)
+        fb2 = jnp.where(~same_b & (side == -1), 0.5 * fb2, fb2)
+        move = searching & bracketing
+        keep1 = lambda x, old: jnp.where(searching, x, old)  # noqa: E731
+        sub = searching & ~bracketing
+        out.update(a=jnp.where(move, a2, a), b=jnp.where(move, b2, b), side=jnp.where(move, jnp.where(same_b, 1, -1), side),
+                   theta=keep1(theta, st["theta"]), mid=select_carry(searching & (k == n_iter), new, st["mid"]),
+                   out=select_carry(searching & second, new, st["out"]),
+                   sub_iters=st["sub_iters"] + jnp.where(sub, info.iterations, 0).astype(jnp.int32),
+                   sub_conv=st["sub_conv"] & (~sub | info.converged), k=keep1(k + 1, k))
+        out["fa"] = jnp.where(move, fa2, out["fa"])
+        out["fb"] = jnp.where(move, fb2, out["fb"])
+        phase = jnp.where(ended, jnp.where(out["crossed"], 1, 2),
+                          jnp.where(searching & (k + 1 >= n_iter + 2), 2, st["phase"]))
+        out["phase"] = phase.astype(jnp.int32)
+        return out
 
-    out, iters, conv = run_if(jnp.any(crossed), lambda _: branch(),
-                              (new, jnp.zeros((), jnp.int32), jnp.array(True)))
-    return out, (iters, conv), jnp.any(crossed)
+    st = jax.lax.while_loop(lambda st: st["phase"] < 2, body, init)
+    crossed = st["crossed"]
+    result = select_carry(crossed, st["out"], st["step"])
+    return result, StepInfo(st["step_iters"] + st["sub_iters"], jnp.where(crossed, st["sub_conv"], st["step_conv"])), crossed
 
 
 def _step_with_retries(system, integrator, carry, h, context, options):
@@ -458,16 +508,14 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
         # running (a failed member repeating its failing step made every later step run
         # the full retry ladder).
         hs = jnp.where(active, h, FROZEN_STEP * h)
-        if options.max_halvings:
-            new, info = _step_with_retries(system, integrator, loop.carry, hs, context, options)
+        if any(_located(system, options)):
+            new2, info, crossed = _located_step(system, integrator, loop.carry, hs, context, options)
+        elif options.max_halvings:
+            (new2, info), crossed = _step_with_retries(system, integrator, loop.carry, hs, context, options), False
         else:
-            new, info = _step(integrator, system, loop.carry, hs, context)
-        new2, extra, crossed = _crossing(system, integrator, loop.carry, new, hs, context, options)
+            (new2, info), crossed = _step(integrator, system, loop.carry, hs, context), False
         it = info.iterations
         conv = info.converged
-        if extra is not None:
-            it = it + extra[0]
-            conv = jnp.where(crossed, extra[1], conv)
         code = step_status(system, loop.carry, new2, conv, options)
         ok = active & (code == Failure.OK)
         carry = select_carry(ok, new2, loop.carry)
