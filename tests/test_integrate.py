@@ -298,3 +298,28 @@ def test_second_chunk_reuses_the_program(name):
         return [(jax.typeof(x).shape, jax.typeof(x).dtype, jax.typeof(x).weak_type) for x in jax.tree.leaves(tree)]
 
     assert types(out) == types(loop)
+
+
+@pytest.mark.parametrize("max_halvings", [0, 3])
+def test_a_located_run_holds_one_copy_of_the_step(max_halvings, monkeypatch):
+    """The step, its retries (max_halvings > 0), the crossing's search and its two
+    substeps are passes of one loop (``integrate._located_step``): tracing a located
+    run's program traces the integrator's step once (before 2026-12-07 twice: a loop
+    for the retries or a plain step, and one for the crossing); a run locating nothing
+    traces it once as well."""
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    from ancf_jax.integrate import initial_loop, integrate_fixed
+    system, state = track_model(uneven_arc(4, 1.0, 1.2), S0).build()
+    context = RK4().prepare(system)
+    loop = jax.eval_shape(lambda: initial_loop(system, RK4(), state, context))  # traced, not run
+    calls = []
+    step = RK4.step
+    monkeypatch.setattr(RK4, "step", lambda self, *a: calls.append(1) or step(self, *a))
+    for locate in (True, False):
+        calls.clear()
+        eqx.filter_make_jaxpr(lambda lp, h: integrate_fixed(
+            system, RK4(), lp, context, h, n_intervals=2, substeps=1,
+            options=RunOptions(locate_crossings=locate, max_halvings=max_halvings)))(loop, jnp.asarray(0.01))
+        assert len(calls) == 1, (locate, len(calls))
