@@ -39,7 +39,7 @@ Node crossings of moving forces and contact points (``locate_load_nodes``,
 :func:`ancf_jax.forces.node_crossing_values`) are located like kinks when asked for,
 not with ``locate_crossings``: those forces are C¹ in time there (docs/moving-loads.md
 measures under 1 % of a run's error), and every located crossing costs
-``crossing_iterations`` + 1 extra steps.
+``crossing_iterations`` + 2 extra steps (the search's steps and the two substeps).
 """
 
 from __future__ import annotations
@@ -302,10 +302,11 @@ def _located_step(system, integrator, carry, h, context, options):
 
     One while loop holds the only copy of the integrator's step in the compiled program
     (a loop for the retries and another for the crossing, each with its step, doubled
-    the program): every pass takes one step, from the start of the step or the last
-    good substep (the step and its retries), then, where the completed step straddles a
-    crossing, from the start with the regula-falsi fractions θh and the two substeps θh
-    and (1 − θ)h.
+    the program): every pass takes one step. First the step and its retries, from the
+    start of the step or the last good substep; then, where the step's outcome (the
+    completed step, or its first attempt if the retries ran out) straddles a crossing,
+    the regula-falsi search (steps θh from the start) and the two substeps, θh from the
+    start and (1 − θ)h from the end of the first.
 
     Returns (carry, StepInfo, crossed) for the completed step of size h."""
     slides, kinked, nodes_of_loads = _located(system, options)
@@ -348,13 +349,14 @@ def _located_step(system, integrator, carry, h, context, options):
     h_min = h / 2.0**options.max_halvings
     g0 = values(carry)
     zero = jnp.zeros((), jnp.asarray(h).dtype)
+    zg = jnp.zeros((), g0.dtype)  # the search's fractions and watched values
     zi = jnp.zeros((), jnp.int32)
     yes, no = jnp.array(True), jnp.array(False)
     # phase 0: the step and its retries; 1: the crossing's search and substeps; 2: done
     init = dict(phase=zi, c=carry, first=carry, g_c=g0, g_first=g0, done=zero, h_try=h + zero, attempt=zi,
                 iters=zi, step=carry, step_iters=zi, step_conv=yes, crossed=no,
-                idx=zi, tgt=zero, before=no, k=zi, a=zero, b=zero + 1.0, fa=zero, fb=zero, side=zi,
-                theta=zero + 0.5, mid=carry, out=carry, sub_iters=zi, sub_conv=yes)
+                idx=zi, tgt=zg, before=no, k=zi, a=zg, b=zg + 1.0, fa=zg, fb=zg, side=zi,
+                theta=zg + 0.5, mid=carry, out=carry, sub_iters=zi, sub_conv=yes)
 
     def body(st):
         searching = st["phase"] == 1

@@ -283,7 +283,8 @@ class System(eqx.Module):
         """The beams in groups of like beams (static): equal structure (element, laws,
         formulation, static settings) and equal array shapes, e.g. the two wires of a
         catenary padded to one node count. :meth:`map_beams` evaluates a group in one
-        vectorized evaluation, so its element code is traced and compiled once."""
+        vectorized evaluation, so its element code is traced and compiled once. A beam
+        with leaves that are not arrays (a Python float) is a group of its own."""
         groups: dict = {}
         for i, b in enumerate(self.beams):
             leaves, treedef = jax.tree.flatten(b)
@@ -298,7 +299,8 @@ class System(eqx.Module):
         """``[fn(beam_b, *(a[b] for a in per_beam)) for every beam b]``, with the beams of a
         group of like beams (:meth:`beam_groups`) stacked and ``fn`` vectorized over
         them (``jax.vmap``): one traced evaluation per group. ``per_beam``: sequences
-        of one array (or pytree) per beam; ``fn`` returns a pytree of arrays."""
+        of one array (or pytree) per beam, of equal shapes within a group (the beams'
+        nodes, velocities); ``fn`` returns a pytree of arrays."""
         out = [None] * len(self.beams)
         for group in self.beam_groups():
             if len(group) == 1:
