@@ -286,6 +286,20 @@ def adaptive_failure(result):
     return code
 
 
+def _retry_rule(system, options, h, h_min, c, first, done, h_try, attempt, new, info, dt, active=True):
+    """The rule of a step's retries after one attempt ``new`` of size dt from c
+    (:func:`_step_with_retries`; ``active``: where the attempt counts as one): kept if
+    not rejected (:func:`step_rejected`), the next attempt twice as long after a success
+    (up to h) and half as long after a failure, down to h_min. Returns (first attempt?,
+    kept?, first, c, done, next size, whether to go on)."""
+    good = step_rejected(system, c, new, info.converged, options) == Failure.OK
+    first_try, taken = active & (attempt == 0), active & good
+    h_next = jnp.where(good, jnp.minimum(2.0 * h_try, h), 0.5 * h_try)
+    ok = good | (0.5 * h_try >= h_min * (1.0 - 1e-12))
+    return (first_try, taken, select_carry(first_try, new, first), select_carry(taken, new, c),
+            jnp.where(taken, done + dt, done), h_next, ok)
+
+
 def _located(system, options):
     """(sliding joints' beams, kinks located, node crossings of loads located) of the
     crossing search (module doc); all empty/False: nothing is located."""
@@ -378,17 +392,14 @@ def _located_step(system, integrator, carry, h, context, options):
         out = dict(st)
 
         # phase 0: the step, redone in substeps after a failure (_step_with_retries)
-        good = step_rejected(system, st["c"], new, info.converged, options) == Failure.OK
         stepping = st["phase"] == 0
         keep0 = lambda x, old: jnp.where(stepping, x, old)  # noqa: E731
-        first_try = stepping & (st["attempt"] == 0)
-        taken = stepping & good
-        out.update(first=select_carry(first_try, new, st["first"]), g_first=jnp.where(first_try, g_new, st["g_first"]),
-                   c=select_carry(taken, new, st["c"]), g_c=jnp.where(taken, g_new, st["g_c"]),
-                   done=jnp.where(taken, st["done"] + dt, st["done"]),
-                   h_try=keep0(jnp.where(good, jnp.minimum(2.0 * st["h_try"], h), 0.5 * st["h_try"]), st["h_try"]),
+        first_try, taken, first, c, done, h_next, ok = _retry_rule(
+            system, options, h, h_min, st["c"], st["first"], st["done"], st["h_try"], st["attempt"], new, info, dt,
+            active=stepping)
+        out.update(first=first, g_first=jnp.where(first_try, g_new, st["g_first"]),
+                   c=c, g_c=jnp.where(taken, g_new, st["g_c"]), done=done, h_try=keep0(h_next, st["h_try"]),
                    iters=keep0(st["iters"] + info.iterations, st["iters"]), attempt=keep0(st["attempt"] + 1, st["attempt"]))
-        ok = good | (0.5 * st["h_try"] >= h_min * (1.0 - 1e-12))
         completed = out["done"] >= h * (1.0 - 1e-12)
         ended = stepping & ~(ok & ~completed)
         # the step (as _step_with_retries returns it) and where it straddles a crossing
@@ -458,12 +469,8 @@ def _step_with_retries(system, integrator, carry, h, context, options):
         c, first, done, h_try, iters, _, attempt = st
         dt = jnp.minimum(h_try, h - done)
         new, info = integrator.step(system, c, dt, context)
-        good = step_rejected(system, c, new, info.converged, options) == Failure.OK
-        first = select_carry(attempt == 0, new, first)
-        c = select_carry(good, new, c)
-        done = jnp.where(good, done + dt, done)
-        h_next = jnp.where(good, jnp.minimum(2.0 * h_try, h), 0.5 * h_try)
-        ok = good | (0.5 * h_try >= h_min * (1.0 - 1e-12))
+        _, _, first, c, done, h_next, ok = _retry_rule(system, options, h, h_min, c, first, done, h_try, attempt,
+                                                       new, info, dt)
         return c, first, done, h_next, iters + info.iterations, ok, attempt + 1
 
     zero = jnp.zeros((), jnp.asarray(h).dtype)

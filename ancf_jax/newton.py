@@ -206,8 +206,12 @@ class ModifiedNewton(eqx.Module):
                 fac = jax.tree.map(lambda f, g: jnp.where(ok, f, g), fac, c["fac"])
             out.update(x=x_new, fac=fac, done=done, err=err, refresh=refresh)
             if guarded:
-                out = jax.tree.map(lambda a, b: jnp.where(last, a, b), dict(c, rn=rn, final=True),
-                                   dict(out, final=jnp.array(False)))
+                # the last pass keeps everything but rn; the factors are its own already (no
+                # refactorization there), so they are not selected (megabytes for long wires)
+                kept = dict(c, rn=rn, final=jnp.array(True))
+                out = dict(out, final=jnp.array(False))
+                out = {k: v if k == "fac" else jax.tree.map(lambda a, b: jnp.where(last, a, b), kept[k], v)
+                       for k, v in out.items()}
             return out
 
         zero = jnp.zeros((), jnp.int32)
