@@ -231,7 +231,8 @@ class ModifiedNewton(eqx.Module):
         return NewtonSolution(c["x"], c["it"], c["done"], c["rn"])
 
     def root(self, residual, linearize, x0, *, size: int, implicit: bool = True,
-             refinement: int = 4, chain_factor=None, factors=None, refresh=True) -> NewtonSolution:
+             refinement: int = 4, chain_factor=None, factors=None, refresh=True,
+             tangent_linearize=None) -> NewtonSolution:
         """:meth:`solve`, differentiated implicitly when ``implicit`` (module docstring).
 
         The tangent systems J ẋ = −∂F/∂θ θ̇ are solved with ``linearize`` factored at the
@@ -242,6 +243,11 @@ class ModifiedNewton(eqx.Module):
         reverse mode; an approximate matrix (the projection without its curvature term,
         the index-2 step) needs the refinement steps.
 
+        ``tangent_linearize``: the matrix the tangent solves factor at the solution
+        instead of ``linearize`` (same signature and structure), e.g. the exact Jacobian
+        where the iteration converges with a cheaper approximation of it: the tangents
+        are then exact with ``refinement = 0``, and the iteration keeps its cheap matrix.
+
         ``factors`` and ``refresh`` as for :meth:`solve`: they serve the forward
         iteration only."""
         kw = dict(size=size, chain_factor=chain_factor, factors=factors, refresh=refresh)
@@ -251,6 +257,8 @@ class ModifiedNewton(eqx.Module):
         # arguments only): F(x, θ) and the matrix's own arguments
         res_fn, res_consts = _hoisted(residual, x0)
         lin_fn, lin_consts = _hoisted(linearize, x0)
+        own_tangent = tangent_linearize is not None
+        tan_fn, tan_consts = _hoisted(tangent_linearize, x0) if own_tangent else (lin_fn, ())
         kept = factors is not None
 
         def run(x0, held, refresh, res_consts, lin_consts):
@@ -263,17 +271,18 @@ class ModifiedNewton(eqx.Module):
             return sol.x, aux
 
         @jax.custom_jvp
-        def implicit_root(x0, held, refresh, res_consts, lin_consts):
+        def implicit_root(x0, held, refresh, res_consts, lin_consts, tan_consts):
             return run(x0, held, refresh, res_consts, lin_consts)
 
         @implicit_root.defjvp
         def implicit_root_jvp(primals, tangents):
-            x0, held, refresh, res_consts, lin_consts = primals
-            x, aux = run(*primals)
+            x0, held, refresh, res_consts, lin_consts, tan_consts = primals
+            x, aux = run(*primals[:5])
             # ∂F/∂x ẋ = −∂F/∂θ θ̇ at the solution; x0's and the factors' tangents do not
             # enter (the root does not depend on them)
             _, rhs = jax.jvp(lambda c: res_fn(x, *c), (tuple(res_consts),), (tuple(tangents[3]),))
-            fac = self.factor(lambda z: lin_fn(z, *lin_consts), jax.lax.stop_gradient(x), held[0])
+            consts = tan_consts if own_tangent else lin_consts
+            fac = self.factor(lambda z: tan_fn(z, *consts), jax.lax.stop_gradient(x), held[0])
             dx = self.linear_solver.compute(fac, -rhs)
             if refinement:
                 _, jac = jax.linearize(lambda z: res_fn(z, *jax.lax.stop_gradient(res_consts)), x)
@@ -285,7 +294,7 @@ class ModifiedNewton(eqx.Module):
             return (x, aux), (dx, jax.tree.map(jnp.zeros_like, aux))
 
         held = jax.lax.stop_gradient((chain_factor, factors))
-        x, aux = implicit_root(x0, held, jnp.asarray(refresh), res_consts, lin_consts)
+        x, aux = implicit_root(x0, held, jnp.asarray(refresh), res_consts, lin_consts, tan_consts)
         aux = jax.lax.stop_gradient(aux)
         iters, conv = aux[0].astype(jnp.int32), aux[1] > 0.5
         if not kept:

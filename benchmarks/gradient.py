@@ -18,12 +18,13 @@ Exudyn: one forward run of the same case at its equal-accuracy settings; it has 
 gradients (finite differences only) and no stiffness-proportional β for the cable.
 
 Equal accuracy for gradients too: the tangent solves of the implicit-function-theorem
-derivative use ``refinement`` steps of iterative refinement (by default 4 here, where
-the Newton matrix leaves out the rate term of a β set after the build; none where it
-is exact). The value and
-gradient are also timed for ``REFINEMENTS``; the reference gradient is the most refined
-one, and the ratio at equal accuracy is that of the fastest setting whose gradient is
-within ``GRADIENT_TOLERANCE`` (relative, per component) of it.
+derivative factor, by default, the exact Jacobian of the step residual (here, where the
+iteration's Newton matrix leaves out the rate term of a β set after the build, the
+matrix with it: ``GeneralizedAlpha.tangent_system``), unrefined: the row "exact". The
+value and gradient are also timed with the iteration's own matrix and ``REFINEMENTS``
+steps of iterative refinement; the reference gradient is the most refined one, and the
+ratio at equal accuracy is that of the fastest setting whose gradient is within
+``GRADIENT_TOLERANCE`` (relative, per component) of it.
 
     python -m benchmarks.gradient [--quick]
 """
@@ -46,6 +47,8 @@ TRUTH = (0.02, 0.0)
 FD_REL_STEP = 1e-4
 #: iterative-refinement steps of the tangent solves timed (the last is the reference)
 REFINEMENTS = (0, 1, 2, 4, 8)
+#: the sweep's label of the default: the exact tangent matrix, unrefined
+EXACT = "exact"
 #: relative accuracy of each gradient component required at "equal accuracy": far below
 #: what a fit needs (its standard errors are percent-level) and below the agreement
 #: with central differences (their truncation and rounding errors)
@@ -70,7 +73,7 @@ def make_loss(system, state, solver, t_end, dt):
     tip_index = system.beam_offset(0) + 4 * n + 1
     # β enters after the build (as a traced parameter): the Newton matrix leaves its
     # β-rate term out (Beam.rate_stiffness off: the fastest forward run), so the tangent
-    # solves refine (GeneralizedAlpha.tangent_refinement)
+    # solves factor the matrix with it (GeneralizedAlpha.tangent_system) or refine
 
     def tip(theta):
         s = eqx.tree_at(lambda s: (s.beams[0].alpha, s.beams[0].beta), system, (theta[0], theta[1]))
@@ -157,8 +160,9 @@ def main(argv=None, *, quick=None, exudyn=None):
     compile_vg_fwd = time.perf_counter() - t0
     print(f"gradient: compile forward {compile_fwd:.1f} s, value_and_grad {compile_vg:.1f} s, "
           f"forward mode {compile_vg_fwd:.1f} s", flush=True)
-    default_refinement = solver.tangent_refinement(
-        eqx.tree_at(lambda s: s.beams[0].beta, system, jnp.asarray(THETA0[1])))
+    late_beta = eqx.tree_at(lambda s: s.beams[0].beta, system, jnp.asarray(THETA0[1]))
+    default_refinement = (EXACT if solver.tangent_system(late_beta) is not None
+                          else solver.tangent_refinement(late_beta))
     variants = {default_refinement: (vg, compile_vg)}
     for r in REFINEMENTS:
         if r not in variants:
@@ -237,7 +241,7 @@ def refinement_sweep(measured, default, forward_s):
     the fastest setting within ``GRADIENT_TOLERANCE`` of the most refined gradient gives
     the equal-accuracy ratio."""
     rows = []
-    for r in sorted(measured):
+    for r in sorted(measured, key=lambda r: (r != EXACT, r if r != EXACT else 0)):
         g, times, comp = measured[r]
         rows.append(dict(refinement=r, default=r == default, gradient=np.asarray(g).tolist(),
                          compile_s=comp, median_value_and_grad_s=C.median(times),

@@ -658,28 +658,31 @@ def _gradient_target(g):
     if not g or "median_forward_s" not in g:
         return None, f"section failed: {g['error']}" if g.get("error") else "not run"
     detail = (f"forward {f(g['median_forward_s'])} s, value+grad {f(g['median_value_and_grad_s'])} s "
-              f"(default refinement)")
+              f"(default tangent solves)")
     fm = g.get("ratio_forward_mode_to_forward")
     fm_detail = ("" if fm is None else
                  f"; forward mode (one JVP per parameter, vmapped; the identification fit's jacfwd) "
-                 f"{f(g['median_forward_mode_s'])} s at the default refinement, x{f(fm)}")
+                 f"{f(g['median_forward_mode_s'])} s at the default tangent solves, x{f(fm)}")
     if g.get("ratio_at_equal_accuracy") is None:
         ratio = g.get("ratio_value_and_grad_to_forward")
         return (ratio if fm is None else min(ratio, fm)), detail + fm_detail
     row = next(r for r in g["refinement_sweep"] if r["refinement"] == g["chosen_refinement"])
+    if row["refinement"] == "exact":
+        how = ("the exact Newton matrix (with the β-rate term the iteration's matrix leaves out) factored "
+               "at the step's solution, 1 solve")
+    else:
+        how = (f"the iteration's Newton matrix factored at the step's solution ({row['refinement'] + 1} solves, "
+               f"{row['refinement']} residual linearizations kept for the backward pass)")
     detail = (f"at equal accuracy (gradient within {g['gradient_tolerance']:g} of the most refined): "
               f"refinement {row['refinement']}, value+grad {f(row['median_value_and_grad_s'])} s, forward "
-              f"{f(g['median_forward_s'])} s; every step's tangent system is solved with the Newton matrix "
-              f"factored at the step's solution ({row['refinement'] + 1} solves, {row['refinement']} residual "
-              f"linearizations kept for the backward pass); "
-              + ("the default refinement" if row["default"] else
-                 f"at the default refinement {f(g['ratio_value_and_grad_to_forward'])}") + fm_detail)
+              f"{f(g['median_forward_s'])} s; every step's tangent system is solved with {how}; "
+              + ("the default" if row["default"] else
+                 f"at the default (exact tangent matrix) {f(g['ratio_value_and_grad_to_forward'])}") + fm_detail)
     unrefined = next((r for r in g["refinement_sweep"] if r["refinement"] == 0), None)
     if unrefined is not None and unrefined is not row:
-        detail += (f"; without refinement x{f(unrefined['ratio_to_forward'])}, but "
-                   f"{unrefined['rel_difference_to_reference']:.1e} off: the Newton matrix of this run leaves "
-                   f"out the rate term of β (set after the build), which would make the forward run slower "
-                   f"than the refinement costs")
+        detail += (f"; the iteration's matrix without refinement x{f(unrefined['ratio_to_forward'])}, but "
+                   f"{unrefined['rel_difference_to_reference']:.1e} off: it leaves out the rate term of β "
+                   f"(set after the build; with the term, the forward iteration would be slower)")
     ratio = g["ratio_at_equal_accuracy"]
     return (ratio if fm is None else min(ratio, fm)), detail
 

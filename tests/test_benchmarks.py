@@ -48,12 +48,12 @@ def synthetic(tmp_path):
                          median_value_and_grad_s=0.25, median_finite_differences_s=0.4,
                          ratio_value_and_grad_to_forward=3.5, ratio_fd_to_forward=4.0,
                          gradient=[1.0, 2.0], gradient_fd=[1.0, 2.0], gradient_rel_difference=[1e-6, 1e-6],
-                         # the default (refinement 4) misses the target, refinement 2 is
-                         # within tolerance of refinement 8 and meets it
-                         refinement_sweep=[dict(refinement=r, default=r == 4, gradient=[1.0, 2.0], compile_s=2.0,
-                                                median_value_and_grad_s=0.1 * x, ratio_to_forward=x,
+                         # the default (the exact tangent matrix) misses the target,
+                         # refinement 2 is within tolerance of refinement 8 and meets it
+                         refinement_sweep=[dict(refinement=r, default=r == "exact", gradient=[1.0, 2.0],
+                                                compile_s=2.0, median_value_and_grad_s=0.1 * x, ratio_to_forward=x,
                                                 rel_difference_to_reference=e)
-                                           for r, x, e in ((1, 2.0, 1e-4), (2, 2.5, 1e-7), (4, 3.5, 1e-11),
+                                           for r, x, e in (("exact", 3.5, 1e-11), (1, 2.0, 1e-4), (2, 2.5, 1e-7),
                                                            (8, 4.5, 0.0))],
                          gradient_tolerance=1e-6, chosen_refinement=2, ratio_at_equal_accuracy=2.5))
     put("scaling", dict(section="scaling", exudyn=True, t_end=0.1, dt=1e-3, fit_from=24, exudyn_max=192,
@@ -120,7 +120,8 @@ def test_report_renders_from_json_only(tmp_path):
     line = next(ln for ln in text.splitlines() if ln.startswith("| per-step cost"))
     assert "not measured" in line and "not run up to 384" in line and "p = 1.3" in line
     grad_line = next(v for k, v in lines.items() if k.startswith("value + gradient"))
-    assert "| met |" in grad_line and "refinement 2" in grad_line and "at the default refinement 3.5" in grad_line
+    assert "| met |" in grad_line and "refinement 2" in grad_line and "at the default (exact tangent matrix) 3.5" in grad_line
+    assert "| exact (default) | 2 | 0.35 | 3.5 | 1e-11 |  |" in text
     assert "| 2 | 2 | 0.25 | 2.5 | 1e-07 | ✓ |" in text and "| 8 | 2 | 0.45 | 4.5 | reference |  |" in text
     assert "not measured" in next(v for k, v in lines.items() if k.startswith("batch of 256"))
     assert "Exudyn disabled" in text and "This section failed" in text and "boom" in text

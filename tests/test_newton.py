@@ -113,24 +113,33 @@ def test_residual_norm_is_that_of_the_iterate_returned():
     assert float(norm(residual(before))) > 10 * float(guarded.residual_norm)
 
 
-@pytest.mark.parametrize("matrix, refinement", [("exact", 0), ("approximate", 12)])
+@pytest.mark.parametrize("matrix, refinement", [("exact", 0), ("approximate", 12), ("exact tangent", 0)])
 def test_implicit_derivative_is_the_implicit_function_theorem(root, matrix, refinement):
     """d x*/d c of the root: (∂F/∂x)⁻¹ (the custom JVP), against the closed form. The
     tangent solves factor ``linearize`` at the root: the exact matrix needs no
     refinement; a matrix 10 % off on its diagonal (Newton still converges) is made up
     by iterative refinement against the residual's linearization (contraction 0.11:
-    12 steps reach 1e-11)."""
+    12 steps reach 1e-11), or, unrefined, by an exact ``tangent_linearize`` that the
+    tangent solves factor instead while the iteration keeps the approximate matrix."""
     newton = ModifiedNewton(tolerance=1e-13, contraction=0.0, max_iterations=80)
-    lin = linearize if matrix == "exact" else (lambda x: dense(jnp.diag(2.7 * x**2) + 0.1))
+    approximate = lambda x: dense(jnp.diag(2.7 * x**2) + 0.1)  # noqa: E731
+    lin = linearize if matrix == "exact" else approximate
+    tangent = linearize if matrix == "exact tangent" else None
 
-    def solve(c, refinement=refinement):
-        return newton.root(lambda x: residual(x, c), lin, jnp.cbrt(c), size=N, refinement=refinement).x
+    def solve(c, refinement=refinement, tangent=tangent):
+        return newton.root(lambda x: residual(x, c), lin, jnp.cbrt(c), size=N, refinement=refinement,
+                           tangent_linearize=tangent).x
 
     jac = jax.jacfwd(solve)(C)
     reference = jnp.linalg.inv(jax.jacfwd(residual)(root))  # ∂F/∂c = −I
     np.testing.assert_allclose(jac, reference, rtol=1e-8, atol=1e-12)
     grad = jax.grad(lambda c: jnp.sum(solve(c) ** 2))(C)
     np.testing.assert_allclose(grad, reference.T @ (2 * root), rtol=1e-8)
-    if matrix == "approximate":  # without the refinement the derivative is that of the wrong matrix
-        err = jnp.max(jnp.abs(jax.jacfwd(lambda c: solve(c, 0))(C) - reference))
+    if matrix != "exact":  # without the refinement the derivative is that of the wrong matrix
+        err = jnp.max(jnp.abs(jax.jacfwd(lambda c: solve(c, 0, None))(C) - reference))
         assert err > 1e-3 * jnp.max(jnp.abs(reference))
+    if matrix == "exact tangent":  # the iteration keeps the approximate matrix (linear rate)
+        its = newton.root(residual, approximate, jnp.cbrt(C), size=N, tangent_linearize=linearize).iterations
+        exact_its = newton.solve(residual, linearize, jnp.cbrt(C), size=N).iterations
+        assert int(its) == int(newton.solve(residual, approximate, jnp.cbrt(C), size=N).iterations)
+        assert int(its) > int(exact_its) + 3

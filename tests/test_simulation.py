@@ -158,8 +158,8 @@ def central_differences(f, p0, rel_steps):
 def test_gradient_generalized_alpha_m1_rayleigh():
     """M1 (tip Y averaged over 50 steps of 1 ms) w.r.t. α and β by the implicit
     function theorem through the Newton solves (ModifiedNewton.root's custom JVP; β
-    set after the build, so the Newton matrix leaves its rate term out and the tangent
-    solves are refined).
+    set after the build, so the iteration's Newton matrix leaves its rate term out and
+    the tangent solves factor the matrix with it, GeneralizedAlpha.tangent_system).
 
     FD steps: the functional is almost linear in α, so a large step (1 % of α) has no
     truncation error; smaller steps see the Newton tolerance (1e-10 m per step):
@@ -167,7 +167,8 @@ def test_gradient_generalized_alpha_m1_rayleigh():
     dominates above 1 % (1.5e-6 at 10 %), noise below 0.1 %: at 0.3 % the measured
     agreement is 2e-8. Tolerance 1e-6: 40× the measured FD error, while a derivative
     that missed the dependence through the Newton solve or the tangent-solve refinement
-    would be off by far more."""
+    would be off by far more (3e-4 relative in β for the matrix without its rate term,
+    unrefined: ``benchmarks/gradient.py``)."""
     system, state = m1_model().build()
     p0 = jnp.array([0.02, 1e-5])
     f = rayleigh_functional(system, state, GeneralizedAlpha(), 0.05, 1e-3)
@@ -187,16 +188,27 @@ def test_gradient_with_the_exact_newton_matrix_needs_no_refinement():
     damping loss, ``benchmarks/gradient.py``)."""
     system, state = m1_model().build()
     p0 = jnp.array([0.02, 1e-5])
+    plain = system
     system = system.with_rate_stiffness(True)
     solver = GeneralizedAlpha()
     assert solver.tangent_refinement(eqx.tree_at(lambda s: s.beams[0].beta, system, p0[1])) == 0
-    # a β set after the build without the term: refined (the test above)
-    assert solver.tangent_refinement(eqx.tree_at(lambda s: s.beams[0].beta, m1_model().build()[0], p0[1])) == 4
+    assert solver.tangent_system(eqx.tree_at(lambda s: s.beams[0].beta, system, p0[1])) is None
+    # a β set after the build without the term: the tangent solves factor the matrix
+    # with it (the test above), unrefined
+    late = eqx.tree_at(lambda s: s.beams[0].beta, plain, p0[1])
+    assert solver.tangent_refinement(late) == 0 and solver.tangent_system(late).beams[0].rate_stiffness
     f = rayleigh_functional(system, state, solver, 0.05, 1e-3)
     _, grad = f(p0)
     fd = central_differences(f, p0, (1e-2, 3e-3))
     assert np.all(np.abs(np.asarray(grad)) > 0)
     np.testing.assert_allclose(np.asarray(grad), fd, rtol=1e-6)
+    # the same gradient three ways, beyond what differences resolve: the forward
+    # matrix without the term and the exact tangent matrix (the default), and that
+    # matrix refined 8 times instead (measured agreement 2e-11 on the 2 s loss)
+    _, late_grad = rayleigh_functional(plain, state, solver, 0.05, 1e-3)(p0)
+    _, refined = rayleigh_functional(plain, state, GeneralizedAlpha(refinement=8), 0.05, 1e-3)(p0)
+    np.testing.assert_allclose(np.asarray(late_grad), np.asarray(grad), rtol=1e-9)
+    np.testing.assert_allclose(np.asarray(late_grad), np.asarray(refined), rtol=1e-9)
 
 
 def test_gradient_rk4_h1_rayleigh():

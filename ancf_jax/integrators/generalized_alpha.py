@@ -89,20 +89,26 @@ Differentiable: the root finder's :meth:`~ancf_jax.newton.ModifiedNewton.root` g
 the Newton solve a custom JVP, so ``jax.grad`` and ``jax.jvp`` of a trajectory
 differentiate the converged equations (implicit function theorem) rather than the
 iterations. The tangent systems are solved with the Newton matrix factored at the
-step's solution. At index 3 that matrix is the exact Jacobian of the step residual
-where every beam's :attr:`~ancf_jax.beam.Beam.exact_tangent` holds, so one solve is
-the exact tangent (``refinement`` None: 0; ``tests/test_simulation.py`` checks M1's
-gradient against central differences). Otherwise (index 2, whose matrix leaves out an
-O(h) term; a β set after the build without
-:meth:`~ancf_jax.system.System.with_rate_stiffness`) :data:`APPROXIMATE_MATRIX_REFINEMENT`
-steps of iterative refinement against the residual's exact linearization make up the
-difference. Measured on M1's damping loss (``python -m benchmarks.gradient``, β set
-after the build, 0–2 s): value and gradient 2.8× a forward run unrefined (3e-4 off),
-4.0× with one refinement step (1.2e-7 off the 8-step gradient), 5.1× with the default
-4; with the β-rate term in the matrix no refinement is needed, but the forward run
-took 2.3× longer (53 against 23 ms for 0–1 s). Until 2026-12-05 the matrix was
-factored at the predictor, and the step sat in a conditional that reverse mode copied
-every residual through: 6.9× at 2 refinement steps."""
+step's solution. At index 3 that matrix is made the exact Jacobian of the step residual:
+where a beam's matrix leaves out its β-rate term (not
+:attr:`~ancf_jax.beam.Beam.exact_tangent`: a β set after the build without
+:meth:`~ancf_jax.system.System.with_rate_stiffness`, the fastest forward iteration),
+the tangent solves factor the matrix of :meth:`GeneralizedAlpha.tangent_system`, which
+has it, while the forward iteration keeps its cheaper matrix; one solve is then the
+exact tangent (``refinement`` None: 0; ``tests/test_simulation.py`` checks M1's
+gradient against central differences). At index 2, whose matrix leaves out an O(h)
+term, :data:`APPROXIMATE_MATRIX_REFINEMENT` steps of iterative refinement against the
+residual's exact linearization make up the difference; an explicit ``refinement``
+refines the iteration's own matrix instead. Measured on M1's damping loss
+(``python -m benchmarks.gradient``, β set after the build, 0–2 s, 2-core AMD EPYC,
+2026-12-07, interleaved in one process): value and gradient 3.08× a forward run with
+the exact tangent matrix (2e-11 off the gradient of 8 refinement steps), 2.84× with the
+iteration's matrix and one refinement step (1.2e-7 off), 3.46× with 4 (the default
+until 2026-12-07), 3.98× with 8; forward mode (a JVP per parameter) 2.66×; with the β-rate
+term in the forward iteration's matrix too, the forward run took 2.3× longer (53
+against 23 ms for 0–1 s). Until 2026-12-05 the matrix was factored at the predictor,
+and the step sat in a conditional that reverse mode copied every residual through: 6.9×
+at 2 refinement steps."""
 
 from __future__ import annotations
 
@@ -121,9 +127,9 @@ from .base import AbstractIntegrator, AbstractMemory, Carry, StepInfo
 
 
 #: iterative-refinement steps of the tangent solves of derivatives where the Newton
-#: matrix is not the exact Jacobian of the step residual (index 2; a beam whose β-rate
-#: term is left out, :attr:`~ancf_jax.beam.Beam.exact_tangent`); 4 steps reach the
-#: 8-step gradient of M1's damping loss to 5e-11 (``python -m benchmarks.gradient``)
+#: matrix is not the exact Jacobian of the step residual (index 2); with the matrix
+#: of a beam whose β-rate term is left out, 4 steps reached the 8-step gradient of
+#: M1's damping loss to 2e-14 (``python -m benchmarks.gradient``)
 APPROXIMATE_MATRIX_REFINEMENT = 4
 
 
@@ -275,8 +281,9 @@ class GeneralizedAlpha(AbstractIntegrator):
         velocity_projection: project v onto the velocity constraints after each step
             (default off: module docstring).
         refinement: iterative-refinement steps of the tangent solves (derivatives;
-            integer >= 0); None: as many as the Newton matrix needs
-            (:meth:`tangent_refinement`: 0 where it is exact).
+            integer >= 0), with the iteration's own Newton matrix; None: as many as
+            the tangent matrix needs (:meth:`tangent_refinement`: 0 at index 3, whose
+            tangent matrix is exact, :meth:`tangent_system`).
         implicit_diff: differentiate the converged step equations (implicit function
             theorem) instead of the Newton iterations.
         constraints: the constraint level, :class:`PositionLevel` (index 3, default)
@@ -309,14 +316,22 @@ class GeneralizedAlpha(AbstractIntegrator):
 
     def tangent_refinement(self, system) -> int:
         """Iterative-refinement steps of the tangent solves for ``system``:
-        ``refinement``, or when None 0 where the step's Newton matrix is exact (index 3,
-        every beam's :attr:`~ancf_jax.beam.Beam.exact_tangent`), else
-        :data:`APPROXIMATE_MATRIX_REFINEMENT`."""
+        ``refinement``, or when None the constraint level's (0 at index 3, where the
+        tangent matrix is exact: :meth:`tangent_system`)."""
         if self.refinement is not None:
             return self.refinement
-        if not all(b.exact_tangent for b in system.beams):
-            return max(self.constraints.refinement, APPROXIMATE_MATRIX_REFINEMENT)
         return self.constraints.refinement
+
+    def tangent_system(self, system):
+        """The system whose Newton matrix the tangent solves of derivatives factor, or
+        None where that is ``system``'s own: with ``refinement`` None, ``system`` with
+        the β-rate term in the matrix of every beam that leaves it out (not
+        :attr:`~ancf_jax.beam.Beam.exact_tangent`, e.g. β set after the build), so
+        that at index 3 one solve gives the exact tangent while the forward iteration
+        keeps its cheaper matrix (module docstring)."""
+        if self.refinement is not None or all(b.exact_tangent for b in system.beams):
+            return None
+        return system.with_rate_stiffness([b.rate_stiffness or not b.exact_tangent for b in system.beams])
 
     @property
     def coefficients(self):
@@ -395,15 +410,19 @@ class GeneralizedAlpha(AbstractIntegrator):
                 phi = jnp.zeros((0,), q1.dtype)
             return dae.to_solver_order(system, r_q, phi)
 
-        def linearize(y):
-            q1, v1, _, _, lam = kinematics(y)
-            jac = system.constraint_jacobian(q1, t1)
-            return dae.iteration_matrix(system, q1, v1, lam, t1, beta_p, gamma_p, jac)
+        def matrix(system):
+            def linearize(y):
+                q1, v1, _, _, lam = kinematics(y)
+                jac = system.constraint_jacobian(q1, t1)
+                return dae.iteration_matrix(system, q1, v1, lam, t1, beta_p, gamma_p, jac)
+            return linearize
 
+        exact = self.tangent_system(system) if self.implicit_diff else None
         y0 = dae.to_solver_order(system, jnp.zeros_like(carry.q), carry.lam)
         factors, refresh = self.factor_reuse.start(carry.memory, h)
-        sol = self.root_finder.root(residual, linearize, y0, size=n, implicit=self.implicit_diff,
-                                    refinement=self.tangent_refinement(system), factors=factors, refresh=refresh)
+        sol = self.root_finder.root(residual, matrix(system), y0, size=n, implicit=self.implicit_diff,
+                                    refinement=self.tangent_refinement(system), factors=factors, refresh=refresh,
+                                    tangent_linearize=None if exact is None else matrix(exact))
         memory = self.factor_reuse.update(carry.memory, sol, h)
         q1, v1, qdd, a1, lam = kinematics(sol.x)
         if self.velocity_projection and system.n_constraints:
