@@ -386,7 +386,7 @@ def _located_step(system, integrator, carry, h, context, options):
         theta = jnp.where(bracketing, theta_rf, jnp.where(k == n_iter, theta_best, st["theta"]))
         start = select_carry(searching, select_carry(second, st["mid"], carry), st["c"])
         dt = jnp.where(searching, jnp.where(second, 1.0 - theta, theta) * h,
-                       jnp.minimum(st["h_try"], h - st["done"]))
+                       jnp.where(st["phase"] == 0, jnp.minimum(st["h_try"], h - st["done"]), FROZEN_STEP * h))
         new, info = integrator.step(system, start, dt, context)
         g_new = values(new)
         out = dict(st)
@@ -467,7 +467,7 @@ def _step_with_retries(system, integrator, carry, h, context, options):
 
     def body(st):
         c, first, done, h_try, iters, _, attempt = st
-        dt = jnp.minimum(h_try, h - done)
+        dt = jnp.where(done < h * (1.0 - 1e-12), jnp.minimum(h_try, h - done), FROZEN_STEP * h)
         new, info = integrator.step(system, c, dt, context)
         _, _, first, c, done, h_next, ok = _retry_rule(system, options, h, h_min, c, first, done, h_try, attempt,
                                                        new, info, dt)

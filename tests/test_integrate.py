@@ -192,6 +192,44 @@ def test_failed_batch_member_takes_negligible_steps():
     assert np.all(after[:, 2] <= 2)  # negligible steps: Newton converges at once
 
 
+def test_a_batch_member_done_with_its_step_waits_with_negligible_steps():
+    """Under vmap the retry loop runs its passes until every member has completed its
+    step: a member done with its step still computes one in the passes the others need
+    for their substeps (discarded). It takes a negligible step (FROZEN_STEP · h from its
+    completed state), not one of size h − done = 0 (until 2026-12-07: non-finite
+    states, and a contact's closest-point search raised; test_moving_loads has the
+    located batch). Two M1 variants at h = 4 ms with retries (``max_halvings = 3``):
+    the paper's member needs substeps at some steps (as in
+    test_failed_newton_step_is_completed_in_substeps), the other, at a tenth of
+    gravity, never (measured); both complete. Fails on the old loop (steps of size 0
+    logged, checked)."""
+    import equinox as eqx
+
+    from ancf_jax.integrate import FROZEN_STEP
+    from ancf_jax.models.m1 import m1_model
+    from ancf_jax.simulation import simulate_batch
+
+    system, state = m1_model(6).build()
+    retrying, steady = 0.02, 0.03  # α of the two members, to tell them apart in the log
+    systems = [eqx.tree_at(lambda s: (s.beams[0].alpha, s.gravity), system,
+                           (jax.numpy.asarray(a), g * system.gravity))
+               for a, g in ((retrying, 1.0), (steady, 0.1))]
+    h, t_end = 4e-3, 0.06
+    _STEP_LOG.clear()
+    res = simulate_batch(systems, [state] * 2, t_end=t_end, dt=h, output_dt=h,
+                         options=RunOptions(max_halvings=3), solver=LOGGED_SOLVER, on_failure="return",
+                         progress=False, limits=RunLimits(chunks=1))
+    log = np.concatenate(_STEP_LOG)
+    _STEP_LOG.clear()
+    assert res[0].status == "ok" and res[1].status == "ok"
+    mine, theirs = log[np.isclose(log[:, 0], retrying)], log[np.isclose(log[:, 0], steady)]
+    assert np.any(mine[:, 1] < 0.75 * h)  # the first member took substeps
+    assert len(theirs) > round(t_end / h)  # so the second one waited in extra passes
+    full = np.isclose(theirs[:, 1], h, rtol=1e-12, atol=0)
+    np.testing.assert_allclose(theirs[~full, 1], FROZEN_STEP * h, rtol=1e-12)
+    assert np.sum(full) == round(t_end / h) and np.all(theirs[~full, 2] <= 2)
+
+
 def test_steps_past_the_end_or_a_failure_are_skipped_by_blocks():
     """Unbatched, the steps of a chunk are selected, not branched, and blocks of output
     intervals past the run's end (or its failure) are skipped whole
