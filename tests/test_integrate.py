@@ -153,6 +153,25 @@ class LoggedSteps(GeneralizedAlpha):
 LOGGED_SOLVER = LoggedSteps(root_finder=ModifiedNewton(max_iterations=6))
 
 
+def _logged_pair(alpha_full, alpha_light, h, t_end, *, max_halvings):
+    """Results of a batch of two M1 variants (α = ``alpha_full`` at full gravity,
+    α = ``alpha_light`` at a tenth of it) run with LOGGED_SOLVER at step h [s] to t_end,
+    outputs every step, one chunk; _STEP_LOG holds every step the batch computed."""
+    import equinox as eqx
+
+    from ancf_jax.models.m1 import m1_model
+    from ancf_jax.simulation import simulate_batch
+
+    system, state = m1_model(6).build()
+    systems = [eqx.tree_at(lambda s: (s.beams[0].alpha, s.gravity), system,
+                           (jax.numpy.asarray(a), g * system.gravity))
+               for a, g in ((alpha_full, 1.0), (alpha_light, 0.1))]
+    _STEP_LOG.clear()
+    return simulate_batch(systems, [state] * 2, t_end=t_end, dt=h, output_dt=h,
+                          options=RunOptions(max_halvings=max_halvings), solver=LOGGED_SOLVER,
+                          on_failure="return", progress=False, limits=RunLimits(chunks=1))
+
+
 def test_failed_batch_member_takes_negligible_steps():
     """Under vmap ``lax.cond`` is a select: a member that has failed still computes a
     step (discarded). It must take a negligible step from its last good state (Newton
@@ -161,24 +180,13 @@ def test_failed_batch_member_takes_negligible_steps():
     Newton iterations at h = 4 ms and no retries: the paper's α = 0.02 1/s fails at
     t = 16 ms (see the test above), the other member (measured) runs on. Every step
     the integrator computes is logged with its size and Newton iterations."""
-    import equinox as eqx
-
     from ancf_jax.integrate import FROZEN_STEP
-    from ancf_jax.models.m1 import m1_model
-    from ancf_jax.simulation import simulate_batch
 
-    system, state = m1_model(6).build()
     # the survivor: another α (to tell the members apart in the log) and a tenth of
     # gravity, so its steps converge within 6 iterations (measured)
     failing, running = 0.02, 0.03
-    systems = [eqx.tree_at(lambda s: (s.beams[0].alpha, s.gravity), system,
-                           (jax.numpy.asarray(a), g * system.gravity))
-               for a, g in ((failing, 1.0), (running, 0.1))]
     h, t_end = 4e-3, 0.06
-    _STEP_LOG.clear()
-    res = simulate_batch(systems, [state] * 2, t_end=t_end, dt=h, output_dt=h,
-                         options=RunOptions(max_halvings=0), solver=LOGGED_SOLVER, on_failure="return",
-                         progress=False, limits=RunLimits(chunks=1))
+    res = _logged_pair(failing, running, h, t_end, max_halvings=0)
     assert res[0].status == "newton" and res[1].status == "ok"
     n_ok = int(round(res[0].failure_time / h)) - 1  # steps completed before the failing one
     log = np.concatenate(_STEP_LOG)
@@ -203,22 +211,11 @@ def test_a_batch_member_done_with_its_step_waits_with_negligible_steps():
     test_failed_newton_step_is_completed_in_substeps), the other, at a tenth of
     gravity, never (measured); both complete. Fails on the old loop (steps of size 0
     logged, checked)."""
-    import equinox as eqx
-
     from ancf_jax.integrate import FROZEN_STEP
-    from ancf_jax.models.m1 import m1_model
-    from ancf_jax.simulation import simulate_batch
 
-    system, state = m1_model(6).build()
     retrying, steady = 0.02, 0.03  # α of the two members, to tell them apart in the log
-    systems = [eqx.tree_at(lambda s: (s.beams[0].alpha, s.gravity), system,
-                           (jax.numpy.asarray(a), g * system.gravity))
-               for a, g in ((retrying, 1.0), (steady, 0.1))]
     h, t_end = 4e-3, 0.06
-    _STEP_LOG.clear()
-    res = simulate_batch(systems, [state] * 2, t_end=t_end, dt=h, output_dt=h,
-                         options=RunOptions(max_halvings=3), solver=LOGGED_SOLVER, on_failure="return",
-                         progress=False, limits=RunLimits(chunks=1))
+    res = _logged_pair(retrying, steady, h, t_end, max_halvings=3)
     log = np.concatenate(_STEP_LOG)
     _STEP_LOG.clear()
     assert res[0].status == "ok" and res[1].status == "ok"
