@@ -240,7 +240,8 @@ class Beam(eqx.Module):
         """Whether :meth:`element_tangent` is the exact Jacobian of the element force:
         the β-rate term included (:attr:`rate_stiffness`, a rate law), or β a concrete
         zero. (False for a β traced or set after construction without
-        :meth:`with_rate_stiffness`: derivatives then refine their tangent solves.)"""
+        :meth:`with_rate_stiffness`: derivatives then factor a matrix with the term for
+        their tangent solves, :meth:`ancf_jax.integrators.generalized_alpha.GeneralizedAlpha.tangent_system`.)"""
         return bool(self.rate_stiffness or self.has_rate_law or not _maybe_nonzero(self.beta))
 
     def with_rate_stiffness(self, on: bool = True) -> "Beam":

@@ -35,7 +35,9 @@ class InexactNewtonMatrixWarning(UserWarning):
     naming the joint: the matrix leaves out its constraint Hessian between beam
     coordinates, exact only when Φ is linear in them
     (:class:`ancf_jax.joints.AbstractConstraint`); otherwise Newton converges more slowly
-    or fails (reported as a Newton failure), the solution it reaches is unaffected.
+    or fails (reported as a Newton failure), the solution it reaches is unaffected;
+    derivatives refine their tangent solves against the residual's exact linearization
+    (``GeneralizedAlpha.tangent_refinement``).
     """
 
 

@@ -235,18 +235,20 @@ class ModifiedNewton(eqx.Module):
              tangent_linearize=None) -> NewtonSolution:
         """:meth:`solve`, differentiated implicitly when ``implicit`` (module docstring).
 
-        The tangent systems J ẋ = −∂F/∂θ θ̇ are solved with ``linearize`` factored at the
-        solution, then ``refinement`` steps of iterative refinement against the exact
-        Jacobian of ``residual`` (by ``jax.linearize``). Where ``linearize`` is the
-        exact Jacobian (the generalized-α step at index 3), ``refinement = 0`` gives the
-        exact derivative, and nothing of the residual's linearization is kept for
-        reverse mode; an approximate matrix (the projection without its curvature term,
-        the index-2 step) needs the refinement steps.
+        The tangent systems J ẋ = −∂F/∂θ θ̇ are solved with ``linearize`` (or
+        ``tangent_linearize``) factored at the solution, then ``refinement`` steps of
+        iterative refinement against the exact Jacobian of ``residual`` (by
+        ``jax.linearize``). Where the matrix factored is the exact Jacobian (the
+        generalized-α step at index 3), ``refinement = 0`` gives the exact derivative,
+        and nothing of the residual's linearization is kept for reverse mode; an
+        approximate matrix (the projection without its curvature term, the index-2
+        step) needs the refinement steps.
 
         ``tangent_linearize``: the matrix the tangent solves factor at the solution
-        instead of ``linearize`` (same signature and structure), e.g. the exact Jacobian
-        where the iteration converges with a cheaper approximation of it: the tangents
-        are then exact with ``refinement = 0``, and the iteration keeps its cheap matrix.
+        instead of ``linearize`` (same signature and structure, and the same chain
+        block where a ``chain_factor`` is given), e.g. the exact Jacobian where the
+        iteration converges with a cheaper approximation of it: the tangents are then
+        exact with ``refinement = 0``, and the iteration keeps its cheap matrix.
 
         ``factors`` and ``refresh`` as for :meth:`solve`: they serve the forward
         iteration only."""

@@ -673,11 +673,16 @@ def _gradient_target(g):
     else:
         how = (f"the iteration's Newton matrix factored at the step's solution ({row['refinement'] + 1} solves, "
                f"{row['refinement']} residual linearizations kept for the backward pass)")
+    default = next((r for r in g["refinement_sweep"] if r["default"]), None)
+
+    def label(r):
+        return "the exact tangent matrix" if r["refinement"] == "exact" else f"refinement {r['refinement']}"
     detail = (f"at equal accuracy (gradient within {g['gradient_tolerance']:g} of the most refined): "
-              f"refinement {row['refinement']}, value+grad {f(row['median_value_and_grad_s'])} s, forward "
+              f"{label(row)}, value+grad {f(row['median_value_and_grad_s'])} s, forward "
               f"{f(g['median_forward_s'])} s; every step's tangent system is solved with {how}; "
               + ("the default" if row["default"] else
-                 f"at the default (exact tangent matrix) {f(g['ratio_value_and_grad_to_forward'])}") + fm_detail)
+                 f"at the default ({'–' if default is None else label(default)}) "
+                 f"{f(g['ratio_value_and_grad_to_forward'])}") + fm_detail)
     unrefined = next((r for r in g["refinement_sweep"] if r["refinement"] == 0), None)
     if unrefined is not None and unrefined is not row:
         detail += (f"; the iteration's matrix without refinement x{f(unrefined['ratio_to_forward'])}, but "

@@ -120,7 +120,7 @@ def test_report_renders_from_json_only(tmp_path):
     line = next(ln for ln in text.splitlines() if ln.startswith("| per-step cost"))
     assert "not measured" in line and "not run up to 384" in line and "p = 1.3" in line
     grad_line = next(v for k, v in lines.items() if k.startswith("value + gradient"))
-    assert "| met |" in grad_line and "refinement 2" in grad_line and "at the default (exact tangent matrix) 3.5" in grad_line
+    assert "| met |" in grad_line and "refinement 2" in grad_line and "at the default (the exact tangent matrix) 3.5" in grad_line
     assert "| exact (default) | 2 | 0.35 | 3.5 | 1e-11 |  |" in text
     assert "| 2 | 2 | 0.25 | 2.5 | 1e-07 | ✓ |" in text and "| 8 | 2 | 0.45 | 4.5 | reference |  |" in text
     assert "not measured" in next(v for k, v in lines.items() if k.startswith("batch of 256"))

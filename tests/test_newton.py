@@ -124,9 +124,11 @@ def test_implicit_derivative_is_the_implicit_function_theorem(root, matrix, refi
     newton = ModifiedNewton(tolerance=1e-13, contraction=0.0, max_iterations=80)
     approximate = lambda x: dense(jnp.diag(2.7 * x**2) + 0.1)  # noqa: E731
     lin = linearize if matrix == "exact" else approximate
-    tangent = linearize if matrix == "exact tangent" else None
 
-    def solve(c, refinement=refinement, tangent=tangent):
+    def solve(c, refinement=refinement, exact_tangent=matrix == "exact tangent"):
+        # the tangent matrix closes over a traced value (c, adding nothing), as a time
+        # step's does, and the iteration's matrix over none: their arguments differ
+        tangent = (lambda x: dense(jnp.diag(3.0 * x**2) + 0.1 + 0.0 * c[0])) if exact_tangent else None
         return newton.root(lambda x: residual(x, c), lin, jnp.cbrt(c), size=N, refinement=refinement,
                            tangent_linearize=tangent).x
 
@@ -136,7 +138,7 @@ def test_implicit_derivative_is_the_implicit_function_theorem(root, matrix, refi
     grad = jax.grad(lambda c: jnp.sum(solve(c) ** 2))(C)
     np.testing.assert_allclose(grad, reference.T @ (2 * root), rtol=1e-8)
     if matrix != "exact":  # without the refinement the derivative is that of the wrong matrix
-        err = jnp.max(jnp.abs(jax.jacfwd(lambda c: solve(c, 0, None))(C) - reference))
+        err = jnp.max(jnp.abs(jax.jacfwd(lambda c: solve(c, 0, False))(C) - reference))
         assert err > 1e-3 * jnp.max(jnp.abs(reference))
     if matrix == "exact tangent":  # the iteration keeps the approximate matrix (linear rate)
         its = newton.root(residual, approximate, jnp.cbrt(C), size=N, tangent_linearize=linearize).iterations

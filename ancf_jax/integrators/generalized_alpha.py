@@ -97,8 +97,9 @@ the tangent solves factor the matrix of :meth:`GeneralizedAlpha.tangent_system`,
 has it, while the forward iteration keeps its cheaper matrix; one solve is then the
 exact tangent (``refinement`` None: 0; ``tests/test_simulation.py`` checks M1's
 gradient against central differences). At index 2, whose matrix leaves out an O(h)
-term, :data:`APPROXIMATE_MATRIX_REFINEMENT` steps of iterative refinement against the
-residual's exact linearization make up the difference; an explicit ``refinement``
+term (and with a joint not declared linear in the beam coordinates, whose chain–chain
+Hessian the matrix leaves out), :data:`APPROXIMATE_MATRIX_REFINEMENT` steps of iterative
+refinement against the residual's exact linearization make up the difference; an explicit ``refinement``
 refines the iteration's own matrix instead. Measured on M1's damping loss
 (``python -m benchmarks.gradient``, β set after the build, 0–2 s, 2-core AMD EPYC,
 2026-12-07, interleaved in one process): value and gradient 3.08× a forward run with
@@ -121,15 +122,17 @@ import jax
 import jax.numpy as jnp
 
 from .. import dae
+from ..joints import linear_in_beam_coordinates
 from ..newton import ModifiedNewton
 from ..validation import check_count
 from .base import AbstractIntegrator, AbstractMemory, Carry, StepInfo
 
 
 #: iterative-refinement steps of the tangent solves of derivatives where the Newton
-#: matrix is not the exact Jacobian of the step residual (index 2); with the matrix
-#: of a beam whose β-rate term is left out, 4 steps reached the 8-step gradient of
-#: M1's damping loss to 2e-14 (``python -m benchmarks.gradient``)
+#: matrix is not the exact Jacobian of the step residual (index 2; a joint not
+#: declared linear in the beam coordinates); with the matrix of a beam whose β-rate
+#: term is left out, 4 steps reached the 8-step gradient of M1's damping loss to 4.5e-14
+#: (``python -m benchmarks.gradient``)
 APPROXIMATE_MATRIX_REFINEMENT = 4
 
 
@@ -317,9 +320,14 @@ class GeneralizedAlpha(AbstractIntegrator):
     def tangent_refinement(self, system) -> int:
         """Iterative-refinement steps of the tangent solves for ``system``:
         ``refinement``, or when None the constraint level's (0 at index 3, where the
-        tangent matrix is exact: :meth:`tangent_system`)."""
+        tangent matrix is exact: :meth:`tangent_system`), and at least
+        :data:`APPROXIMATE_MATRIX_REFINEMENT` where a joint is not declared linear in
+        the beam coordinates (its chain–chain Hessian is not in the matrix:
+        :func:`ancf_jax.joints.linear_in_beam_coordinates`)."""
         if self.refinement is not None:
             return self.refinement
+        if not all(linear_in_beam_coordinates(c) for c in system.constraints):
+            return max(self.constraints.refinement, APPROXIMATE_MATRIX_REFINEMENT)
         return self.constraints.refinement
 
     def tangent_system(self, system):
