@@ -102,10 +102,11 @@ Hessian the matrix leaves out), :data:`APPROXIMATE_MATRIX_REFINEMENT` steps of i
 refinement against the residual's exact linearization make up the difference; an explicit ``refinement``
 refines the iteration's own matrix instead. Measured on M1's damping loss
 (``python -m benchmarks.gradient``, β set after the build, 0–2 s, 2-core AMD EPYC,
-2026-12-07, interleaved in one process): value and gradient 3.08× a forward run with
-the exact tangent matrix (2e-11 off the gradient of 8 refinement steps), 2.84× with the
-iteration's matrix and one refinement step (1.2e-7 off), 3.46× with 4 (the default
-until 2026-12-07), 3.98× with 8; forward mode (a JVP per parameter) 2.66×; with the β-rate
+2026-12-07, interleaved in one process; three runs, the machine's speed varying between
+them): value and gradient 3.1–5.1× a forward run with the exact tangent matrix (7e-12 off
+the gradient of 8 refinement steps), 2.8–4.6× with the iteration's matrix and one
+refinement step (1.2e-7 off), 3.5–5.3× with 4 (the default until 2026-12-07), 4.0–5.6×
+with 8; forward mode (a JVP per parameter) 2.7–5.1×; with the β-rate
 term in the forward iteration's matrix too, the forward run took 2.3× longer (53
 against 23 ms for 0–1 s). Until 2026-12-05 the matrix was factored at the predictor,
 and the step sat in a conditional that reverse mode copied every residual through: 6.9×
