@@ -466,11 +466,11 @@ def _step_with_retries(system, integrator, carry, h, context, options):
         return ok & (done < h * (1.0 - 1e-12))
 
     def body(st):
-        c, first, done, h_try, iters, going, attempt = st
+        c, first, done, h_try, iters, _, attempt = st
         # under vmap the passes go on while any member needs one: a member done with its
         # step, or out of retries, takes a negligible one (discarded), not one of size
         # h − done = 0 (non-finite) or its failing one again (a full Newton loop)
-        dt = jnp.where(going & (done < h * (1.0 - 1e-12)), jnp.minimum(h_try, h - done), FROZEN_STEP * h)
+        dt = jnp.where(cond(st), jnp.minimum(h_try, h - done), FROZEN_STEP * h)
         new, info = integrator.step(system, c, dt, context)
         _, _, first, c, done, h_next, ok = _retry_rule(system, options, h, h_min, c, first, done, h_try, attempt,
                                                        new, info, dt)
