@@ -286,18 +286,27 @@ def adaptive_failure(result):
     return code
 
 
-def _retry_rule(system, options, h, h_min, c, first, done, h_try, attempt, new, info, dt, active=True):
+def _retry_next(system, options, h, h_min, c, done, h_try, new, info, dt, active=True):
     """The rule of a step's retries after one attempt ``new`` of size dt from c
     (:func:`_step_with_retries`; ``active``: where the attempt counts as one): kept if
     not rejected (:func:`step_rejected`), the next attempt twice as long after a success
-    (up to h) and half as long after a failure, down to h_min. Returns (first attempt?,
-    kept?, first, c, done, next size, whether to go on)."""
-    good = step_rejected(system, c, new, info.converged, options) == Failure.OK
-    first_try, taken = active & (attempt == 0), active & good
+    (up to h) and half as long after a failure, down to h_min. Returns (the attempt's
+    rejection code, kept?, c, done, next size, whether to go on)."""
+    code = step_rejected(system, c, new, info.converged, options)
+    good = code == Failure.OK
+    taken = active & good
     h_next = jnp.where(good, jnp.minimum(2.0 * h_try, h), 0.5 * h_try)
     ok = good | (0.5 * h_try >= h_min * (1.0 - 1e-12))
-    return (first_try, taken, select_carry(first_try, new, first), select_carry(taken, new, c),
-            jnp.where(taken, done + dt, done), h_next, ok)
+    return code, taken, select_carry(taken, new, c), jnp.where(taken, done + dt, done), h_next, ok
+
+
+def _retry_rule(system, options, h, h_min, c, first, done, h_try, attempt, new, info, dt, active=True):
+    """:func:`_retry_next` keeping the first attempt ``first`` (the located step's
+    crossing search reads its watched values). Returns (first attempt?, kept?, first, c,
+    done, next size, whether to go on)."""
+    _, taken, c, done, h_next, ok = _retry_next(system, options, h, h_min, c, done, h_try, new, info, dt, active)
+    first_try = active & (attempt == 0)
+    return first_try, taken, select_carry(first_try, new, first), c, done, h_next, ok
 
 
 def _located(system, options):
@@ -453,11 +462,15 @@ def _step_with_retries(system, integrator, carry, h, context, options):
     One while loop holds the only copy of the integrator's step in the compiled
     program (a separate first attempt would double the compile time); under vmap only
     the members that need more substeps keep working. If the step cannot be completed,
-    the outcome of the first attempt (size h) is returned, so the failure status names
-    the first cause. Not reverse-differentiable (a while loop): ``trajectory`` runs with
+    the failure is the first attempt's (size h), so the status names the first cause;
+    the loop carries that attempt's rejection code, not its state (a second carry in the
+    loop: M1's step ran 56 more XLA kernels with it, copies and selects of the carry).
+    Not reverse-differentiable (a while loop): ``trajectory`` runs with
     ``max_halvings = 0``.
 
-    Returns (carry, StepInfo).
+    Returns (carry, StepInfo, code): the completed step, or where it could not be
+    completed the last substep kept (or ``carry``) with converged False and the first
+    attempt's :func:`step_rejected` code.
     """
     h_min = h / 2.0**options.max_halvings
 
@@ -466,23 +479,22 @@ def _step_with_retries(system, integrator, carry, h, context, options):
         return ok & (done < h * (1.0 - 1e-12))
 
     def body(st):
-        c, first, done, h_try, iters, _, attempt = st
+        c, first_code, done, h_try, iters, _, attempt = st
         # under vmap the passes go on while any member needs one: a member done with its
         # step, or out of retries, takes a negligible one (discarded), not one of size
         # h − done = 0 (non-finite) or its failing one again (a full Newton loop)
         dt = jnp.where(cond(st), jnp.minimum(h_try, h - done), FROZEN_STEP * h)
         new, info = integrator.step(system, c, dt, context)
-        _, _, first, c, done, h_next, ok = _retry_rule(system, options, h, h_min, c, first, done, h_try, attempt,
-                                                       new, info, dt)
-        return c, first, done, h_next, iters + info.iterations, ok, attempt + 1
+        code, _, c, done, h_next, ok = _retry_next(system, options, h, h_min, c, done, h_try, new, info, dt)
+        first_code = jnp.where(attempt == 0, code, first_code)
+        return c, first_code, done, h_next, iters + info.iterations, ok, attempt + 1
 
     zero = jnp.zeros((), jnp.asarray(h).dtype)
-    c, first, done, _, iters, _, _ = jax.lax.while_loop(
-        cond, body, (carry, carry, zero, h + zero, jnp.zeros((), jnp.int32), jnp.ones((), bool),
-                     jnp.zeros((), jnp.int32)))
+    c, first_code, done, _, iters, _, _ = jax.lax.while_loop(
+        cond, body, (carry, jnp.asarray(Failure.OK), zero, h + zero, jnp.zeros((), jnp.int32),
+                     jnp.ones((), bool), jnp.zeros((), jnp.int32)))
     completed = done >= h * (1.0 - 1e-12)
-    out = select_carry(completed, c, first)
-    return out, StepInfo(iters, completed)
+    return c, StepInfo(iters, completed), first_code
 
 
 #: one step, traced once per program (:func:`~ancf_jax._control.traced_once`): the
@@ -523,16 +535,22 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
         if any(_located(system, options)):
             new2, info, crossed = _located_step(system, integrator, loop.carry, hs, context, options)
         elif options.max_halvings:
-            (new2, info), crossed = _step_with_retries(system, integrator, loop.carry, hs, context, options), False
+            new2, info, first_code = _step_with_retries(system, integrator, loop.carry, hs, context, options)
+            crossed = False
         else:
             (new2, info), crossed = _step(integrator, system, loop.carry, hs, context), False
         it = info.iterations
         conv = info.converged
         code = step_status(system, loop.carry, new2, conv, options)
+        t_end = new2.t
+        if options.max_halvings and not any(_located(system, options)):
+            # a step not completed fails with its first attempt's code, at that attempt's end
+            code = jnp.where(conv, code, first_code)
+            t_end = jnp.where(conv, t_end, loop.carry.t + hs)
         ok = active & (code == Failure.OK)
         carry = select_carry(ok, new2, loop.carry)
         nl = LoopState(carry, jnp.where(active, code, loop.status),
-                       jnp.where(ok | ~active, loop.fail_time, new2.t))
+                       jnp.where(ok | ~active, loop.fail_time, t_end))
         it = jnp.where(active, it, 0)
         return (nl, iters + it, jnp.maximum(maxit, it), ncross + (active & crossed).astype(jnp.int32)), None
 
