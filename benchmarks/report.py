@@ -43,6 +43,9 @@ PROFILE = "step_profile"
 #: written by ``python -m benchmarks.kernel_census`` (not by benchmarks.run); rendered
 #: after the step profile
 CENSUS = "kernel_census"
+#: written by ``python -m benchmarks.border_elimination`` (not by benchmarks.run);
+#: rendered after the kernel census
+BORDER = "border_elimination"
 #: written by ``python -m benchmarks.pantograph_catenary`` (issue 21; not by
 #: benchmarks.run); rendered last, with its own targets
 PANTOGRAPH = "pantograph_catenary"
@@ -61,7 +64,7 @@ def _dense(options) -> bool:
 
 def load(results: Path) -> dict:
     out = {}
-    for name in SECTIONS + EXTRA + (PROFILE, CENSUS, PANTOGRAPH, SUITE, STUDIES):
+    for name in SECTIONS + EXTRA + (PROFILE, CENSUS, BORDER, PANTOGRAPH, SUITE, STUDIES):
         p = results / f"{name}.json"
         if p.exists():
             out[name] = json.loads(p.read_text())
@@ -460,6 +463,28 @@ def sec_loop_kernels(m) -> str:
                    f"{m['m1_ratio_default']:.3f}, loop kernels {m['m1_ratio_loop_kernels']:.3f}.\n\n")
     out.append(f"_Command: `python -m benchmarks.loop_kernels`; {m['stamp']['date']}._\n")
     return "".join(out)
+
+
+def sec_border_elimination(m) -> str:
+    """The fixed coordinates' elimination measured (benchmarks/border_elimination.py)."""
+    t, us = m["timings"], 1e6
+    rows = [[name, f"{t[name]['single_s'] * us:.2f}", f"{t[name]['batch_member_s'] * us:.2f}"]
+            for name in ("full", "reduced", "eliminated")]
+    step = m["bare_step_s"]
+    return ("### Fixed coordinates eliminated from the Newton solve (measured, not built)\n\n"
+            f"{m['model']} ({m['elements']} el.): the clamp's selection rows of Φ_q taken out of the border "
+            f"({m['border']} → {m['border_reduced']} border unknowns; chain positions "
+            f"{m['fixed_chain_positions']} kept as identity rows, reactions recovered from the chain rows). "
+            f"The eliminated solve equals the full one to {m['relative_difference']:.1e} (relative). "
+            "Per step (one factorization, two solves), best of dependent calls in one loop, and per member "
+            f"of a vmapped batch of {m['batch']}:\n\n"
+            + table(["solve", "one run [µs per step]", f"batch of {m['batch']} [µs per member-step]"], rows)
+            + f"\nAt most {m['saving_bound_single_s'] * us:.2f} µs of the bare step's {step * us:.1f} µs "
+            f"({m['saving_bound_single_s'] / step:.1%}) could be saved (the reduced system alone); the elimination "
+            f"itself costs {-m['saving_single_s'] * us:+.2f} µs against the full solve"
+            f" ({-m['saving_batch_member_s'] * us:+.2f} µs per batch member): the border's factorization is a "
+            "small part of the step, whose cost is the Newton matrix's assembly and the number of kernels. "
+            f"Not built.\n\n_Command: `{m['command']}`; {m['stamp']['date']}._\n")
 
 
 def sec_single(d):
@@ -928,6 +953,8 @@ def render(results: Path | None = None, out: Path | None = None) -> Path:
             parts.append(sec_step_profile(data[PROFILE]) + "\n")
         if name == "single_run" and CENSUS in data:
             parts.append(sec_kernel_census(data[CENSUS]) + "\n")
+        if name == "single_run" and BORDER in data:
+            parts.append(sec_border_elimination(data[BORDER]) + "\n")
         if name == "single_run" and _loop_kernels():
             parts.append(sec_loop_kernels(_loop_kernels()) + "\n")
         if name == "batch":

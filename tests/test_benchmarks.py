@@ -143,6 +143,39 @@ def test_kernel_census_kinds():
     assert not "copy.23".startswith(K.NOT_KERNELS)
 
 
+def test_border_elimination_solves_the_same_system_and_renders(tmp_path):
+    """benchmarks/border_elimination.py: M1's clamp rows are found as selection rows of
+    the Newton matrix (node 0's four chain positions), and the solve with them
+    eliminated gives the full solve's solution and reactions; its report section."""
+    import jax
+    import jax.numpy as jnp
+
+    from ancf_jax import dae
+    from ancf_jax.linalg import factor_saddle, solve_saddle
+    from benchmarks import border_elimination as B
+    from benchmarks import cases as C
+
+    system, state = C.m1(3)
+    q, v = state.q, state.v
+    lam = jnp.linspace(1.0, 2.0, system.n_constraints)
+    a = jax.jit(lambda q: dae.iteration_matrix(system, q, v, lam, 0.0, 1e5, 1e3,
+                                               system.constraint_jacobian(q, 0.0)))(q)
+    rows, cols = B.fixed_rows(a, len(system.border_indices()))
+    assert cols.tolist() == [0, 1, 2, 3] and len(rows) == 4  # the clamp; not the fixed joint's rows
+    reduced, keep = B.eliminate(a, rows, cols)
+    r = jnp.asarray(np.random.default_rng(1).standard_normal(a.chain_size + a.e.shape[0]))
+    x = solve_saddle(factor_saddle(a), r)
+    y = B.solve_eliminated(a, factor_saddle(reduced), keep, rows, cols, r)
+    np.testing.assert_allclose(y, x, rtol=0, atol=1e-10 * float(jnp.max(jnp.abs(x))))
+    put = dict(stamp=STAMP, model="M1", elements=6, border=10, border_reduced=6, fixed_chain_positions=[0, 1, 2, 3],
+               relative_difference=1e-14, batch=256, bare_step_s=40e-6, saving_single_s=-1e-6,
+               saving_bound_single_s=0.5e-6, saving_batch_member_s=-0.2e-6, command="cmd border",
+               timings={k: dict(single_s=t * 1e-6, batch_member_s=t * 0.3e-6)
+                        for k, t in (("full", 5.0), ("reduced", 4.5), ("eliminated", 6.0))})
+    text = report.sec_border_elimination(put)
+    assert "| reduced | 4.50 | 1.35 |" in text and "At most 0.50 µs of the bare step's 40.0 µs (1.2%)" in text
+
+
 def test_run_without_exudyn_end_to_end(tmp_path, monkeypatch):
     """run.py with --no-exudyn: the agreement section says Exudyn is missing, the report
     is rendered (into the redirected results folder)."""
