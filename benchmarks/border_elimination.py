@@ -14,17 +14,22 @@ clamp's reactions come back from the chain rows at F afterwards:
 This benchmark builds that elimination on the iteration matrix of a state of M1's run
 (:func:`ancf_jax.dae.iteration_matrix`), checks that it solves the same system (the
 solution and the reactions equal the full solve's to rounding), and times, per
-generalized-α step (one factorization and two solves: M1 takes 2 Newton iterations per
-step at its chosen settings), in a ``fori_loop`` of dependent calls (best of 5):
+generalized-α step (one factorization of a matrix that changes every call, two solves:
+M1 takes 2 Newton iterations per step at its chosen settings), in a ``fori_loop`` of
+dependent calls, in ``ROUNDS`` interleaved rounds (best and median):
 
 * ``full``: the bordered solver as it runs (factor_saddle, two solve_saddle);
-* ``reduced``: the reduced system alone (factor and two solves, its matrix given), a
-  bound on what elimination can save, as the reduction and the recovery are not in it;
-* ``eliminated``: the elimination as it would run in the step: reduce the matrix,
-  factor, and per solve reduce the right-hand side, solve, recover the reactions.
+* ``reduced``: what a built elimination would factor and solve where the fixed
+  coordinates are a whole node block (M1's clamp): the chain without that block (one
+  block shorter) and the border without the fixing multipliers, its matrix given;
+* ``eliminated``: an elimination written on the full matrix (:func:`eliminate`:
+  identity rows in the chain, every chain block masked; per solve the right-hand side
+  reduced and the reactions recovered with products by the whole chain), its own work
+  included: what a version without static knowledge of the fixed block costs.
 
 each for one run and per member of a vmapped batch of 256 (the batch benchmark's
-size), beside the bare step's time in the same process (``benchmarks.step_profile``).
+size), beside the bare step's time in the same process (``benchmarks.step_profile``'s
+bare step, from the model's initial state).
 
     python -m benchmarks.border_elimination
 
@@ -40,12 +45,14 @@ import numpy as np
 from . import cases as C
 from .common import write
 
-#: dependent calls per timing, repetitions (best of), batch size
-N, REPS, BATCH = 200, 5, 256
+#: dependent calls per timing, repetitions (best of) per round, interleaved rounds, batch size
+N, REPS, ROUNDS, BATCH = 2000, 3, 5, 256
 
 
 def _per_call(fn, *args, n=N) -> float:
-    """Best time [s] per call of ``fn(*args, x)`` over n dependent calls in a fori_loop."""
+    """Best time [s] per call of ``fn(*args, d)`` over n dependent calls in a fori_loop
+    (d a scalar from the previous call: ``fn`` must make its matrix depend on it, or
+    XLA computes the factorization once, before the loop)."""
     import jax
     import jax.numpy as jnp
 
@@ -69,14 +76,19 @@ def fixed_rows(a, n_q_border: int):
     """(border rows of fixing multipliers, the chain positions they fix) of a saddle
     matrix ``a``: multiplier rows of C whose only nonzero entry is one chain column and
     whose border entries are zero (a selection row of Φ_q), with a matching column of B."""
+    if a.n_aux:
+        raise ValueError("fixed_rows: a matrix with auxiliary unknowns (force elements) is not handled")
     c, b, e = np.asarray(a.c), np.asarray(a.b), np.asarray(a.e)
     rows, cols = [], []
     for k in range(n_q_border, e.shape[0]):
         nz = np.flatnonzero(c[k])
-        if len(nz) == 1 and not np.any(e[k]) and np.flatnonzero(b[:, k]).tolist() == nz.tolist():
+        if (len(nz) == 1 and not np.any(e[k]) and not np.any(e[:, k])
+                and np.flatnonzero(b[:, k]).tolist() == nz.tolist()):
             rows.append(k)
             cols.append(int(nz[0]))
-    return np.array(rows), np.array(cols)
+    if not rows:
+        raise ValueError("fixed_rows: no multiplier row selects a single chain coordinate")
+    return np.array(rows, int), np.array(cols, int)
 
 
 def eliminate(a, rows, cols):
@@ -98,6 +110,31 @@ def eliminate(a, rows, cols):
     mj = jnp.asarray(m)
     reduced = SaddleMatrix(chain, a.b[:, keep] * mj[:, None], a.c[keep] * mj[None, :], a.e[np.ix_(keep, keep)])
     return reduced, keep
+
+
+def drop_block(a, rows, cols):
+    """The saddle matrix without the chain block that ``cols`` fix (all of its
+    coordinates, in order) and without the fixing multipliers ``rows`` (module docstring):
+    what a built elimination would factor. The neighbours of the block lose their
+    coupling to it (their blocks no longer couple: a zero block between them)."""
+    import jax.numpy as jnp
+
+    from ancf_jax.linalg import BlockTridiagonal, SaddleMatrix
+
+    t = a.chain
+    bs, n = t.block_size, t.n_blocks
+    k = int(cols[0]) // bs
+    if cols.tolist() != list(range(k * bs, (k + 1) * bs)) or n < 3:
+        raise ValueError("drop_block: the fixed coordinates are not one whole chain block of a chain of 3 or more")
+    zero = jnp.zeros((1, bs, bs))
+    def couplings(x):
+        parts = [x[:max(k - 1, 0)]] + ([zero] if 0 < k < n - 1 else []) + [x[k + 1:]]
+        return jnp.concatenate(parts)
+    chain = BlockTridiagonal(jnp.concatenate([t.diagonal[:k], t.diagonal[k + 1:]]), couplings(t.lower),
+                             couplings(t.upper))
+    keep = np.setdiff1d(np.arange(a.e.shape[0]), rows)
+    free = np.setdiff1d(np.arange(a.chain_size), cols)
+    return SaddleMatrix(chain, a.b[free][:, keep], a.c[keep][:, free], a.e[np.ix_(keep, keep)])
 
 
 def jax_diag(d):
@@ -147,39 +184,52 @@ def main() -> dict:
     n_qb = len(system.border_indices())
     rows, cols = fixed_rows(a, n_qb)
     reduced, keep = eliminate(a, rows, cols)
+    dropped = drop_block(a, rows, cols)
     rng = np.random.default_rng(0)
     r = jnp.asarray(rng.standard_normal(a.chain_size + a.e.shape[0]))
     x_full = solve_saddle(factor_saddle(a), r)
     x_elim = solve_eliminated(a, factor_saddle(reduced), keep, rows, cols, r)
-    agreement = float(jnp.max(jnp.abs(x_full - x_elim)) / jnp.max(jnp.abs(x_full)))
+    # the block-dropped system, on the reduced right-hand side, gives the free unknowns
+    n_c, free = a.chain_size, np.setdiff1d(np.arange(a.chain_size), cols)
+    x_f = r[n_c:][rows] / a.c[rows, cols]
+    rc2 = r[:n_c] - a.chain.matvec(jnp.zeros(n_c).at[cols].set(x_f))
+    y = solve_saddle(factor_saddle(dropped), jnp.concatenate([rc2[free], r[n_c:][keep] - a.c[keep][:, cols] @ x_f]))
+    x_drop = jnp.concatenate([x_full[:n_c].at[free].set(y[:len(free)]).at[cols].set(x_f),
+                              x_full[n_c:].at[keep].set(y[len(free):])])
+    agreement = float(max(jnp.max(jnp.abs(x_full - x_elim)), jnp.max(jnp.abs(x_full - x_drop)))
+                      / jnp.max(jnp.abs(x_full)))
 
-    def full(a, r, d):
-        f = factor_saddle(a)
-        return solve_saddle(f, solve_saddle(f, r + d) * 1e-3 + r)
+    def scaled(m, d):
+        """The matrix times 1 + d: a new matrix every call (the factorization stays in the loop)."""
+        return jax.tree.map(lambda x: x * (1.0 + d), m)
 
-    def red(ar, r, d):
-        f = factor_saddle(ar)
-        rr = r[:ar.chain_size + ar.e.shape[0]]
+    def direct(m, r, d):
+        f = factor_saddle(scaled(m, d))
+        rr = r[:m.chain_size + m.e.shape[0]]
         return solve_saddle(f, solve_saddle(f, rr + d) * 1e-3 + rr)
 
     def elim(a, r, d):
+        a = scaled(a, d)
         ar, _ = eliminate(a, rows, cols)
         f = factor_saddle(ar)
         return solve_eliminated(a, f, keep, rows, cols, solve_eliminated(a, f, keep, rows, cols, r + d) * 1e-3 + r)
 
-    timings = {}
-    batched = jax.tree.map(lambda x: jnp.broadcast_to(x, (BATCH,) + x.shape), (a, reduced, r))
-    for name, fn, mat in (("full", full, 0), ("reduced", red, 1), ("eliminated", elim, 0)):
-        single = _per_call(fn, (a, reduced)[mat], r)
-        vm = jax.vmap(fn, in_axes=(0, 0, None))
-        member = _per_call(vm, batched[mat], batched[2], n=N // 10) / BATCH
-        timings[name] = dict(single_s=single, batch_member_s=member)
+    cases = (("full", direct, a), ("reduced", direct, dropped), ("eliminated", elim, a))
+    single, member = {k: [] for k, _, _ in cases}, {k: [] for k, _, _ in cases}
+    for _ in range(ROUNDS):
+        for name, fn, m in cases:
+            single[name].append(_per_call(fn, m, r))
+            batched = jax.tree.map(lambda x: jnp.broadcast_to(x, (BATCH,) + x.shape), (m, r))
+            member[name].append(_per_call(jax.vmap(fn, in_axes=(0, 0, None)), *batched, n=N // 100) / BATCH)
+    timings = {k: dict(single_s=min(single[k]), single_median_s=float(np.median(single[k])),
+                       batch_member_s=min(member[k]), batch_member_median_s=float(np.median(member[k])))
+               for k in single}
     bare, carry0, _ = make_bare_step(solver, system, state, h, 400)
     jax.block_until_ready(bare(carry0))
     step = min(_time(bare, carry0) for _ in range(REPS)) / 400
     out = dict(model="M1", elements=6, h=h, options=opts, border=int(a.e.shape[0]), border_reduced=int(len(keep)),
                fixed_chain_positions=cols.tolist(), relative_difference=agreement, timings=timings,
-               bare_step_s=step, batch=BATCH,
+               bare_step_s=step, batch=BATCH, rounds=ROUNDS,
                saving_single_s=timings["full"]["single_s"] - timings["eliminated"]["single_s"],
                saving_bound_single_s=timings["full"]["single_s"] - timings["reduced"]["single_s"],
                saving_batch_member_s=timings["full"]["batch_member_s"] - timings["eliminated"]["batch_member_s"],

@@ -167,13 +167,28 @@ def test_border_elimination_solves_the_same_system_and_renders(tmp_path):
     x = solve_saddle(factor_saddle(a), r)
     y = B.solve_eliminated(a, factor_saddle(reduced), keep, rows, cols, r)
     np.testing.assert_allclose(y, x, rtol=0, atol=1e-10 * float(jnp.max(jnp.abs(x))))
+    # the chain without the clamp's node block, on the reduced right-hand side: the free unknowns
+    dropped, n_c = B.drop_block(a, rows, cols), a.chain_size
+    free = np.setdiff1d(np.arange(n_c), cols)
+    x_f = x[cols]
+    rhs = jnp.concatenate([(r[:n_c] - a.chain.matvec(jnp.zeros(n_c).at[cols].set(x_f)))[free],
+                           r[n_c:][keep] - a.c[keep][:, cols] @ x_f])
+    z = solve_saddle(factor_saddle(dropped), rhs)
+    np.testing.assert_allclose(z, jnp.concatenate([x[free], x[n_c:][keep]]), rtol=0,
+                               atol=1e-10 * float(jnp.max(jnp.abs(x))))
     put = dict(stamp=STAMP, model="M1", elements=6, border=10, border_reduced=6, fixed_chain_positions=[0, 1, 2, 3],
                relative_difference=1e-14, batch=256, bare_step_s=40e-6, saving_single_s=-1e-6,
                saving_bound_single_s=0.5e-6, saving_batch_member_s=-0.2e-6, command="cmd border",
                timings={k: dict(single_s=t * 1e-6, batch_member_s=t * 0.3e-6)
                         for k, t in (("full", 5.0), ("reduced", 4.5), ("eliminated", 6.0))})
     text = report.sec_border_elimination(put)
-    assert "| reduced | 4.50 | 1.35 |" in text and "At most 0.50 µs of the bare step's 40.0 µs (1.2%)" in text
+    assert "| reduced | 4.50 | 1.35 |" in text and "0.50 µs faster per step" in text
+    assert "costs 1.00 µs more than the full solve (0.20 µs more per batch member)" in text
+    assert "Verdict: not built: the reduced solve would save 1.2% of the step, below 5%" in text
+    assert "0.50 µs faster per step than the full solve (0.15 µs per batch member)" in text
+    put.update(saving_bound_single_s=4e-6)
+    assert "Verdict: worth building: the reduced solve would save 10.0% of the step" in \
+        report.sec_border_elimination(put)
 
 
 def test_run_without_exudyn_end_to_end(tmp_path, monkeypatch):
