@@ -31,6 +31,9 @@ each for one run and per member of a vmapped batch of 256 (the batch benchmark's
 size), beside the bare step's time in the same process (``benchmarks.step_profile``'s
 bare step, from the model's initial state).
 
+Built once in the solver on 2026-12-07 (README, Performance): the step's extra kernels
+for the elimination cost what the smaller factorization saves, so it was reverted.
+
     python -m benchmarks.border_elimination
 
 Writes results/border_elimination.json (RESULTS.md renders it).
