@@ -190,6 +190,15 @@ def targets(data: dict) -> list:
                    f"(cost = a + b n over n ≥ {s.get('fit_from', 24)}: a = {f(marginal['fixed_s'] * 1e6)} µs), "
                    f"local exponent {f(marginal['last_exponent'])} from {marginal['last_counts'][0]} to "
                    f"{marginal['last_counts'][1]} elements")
+    per_it = [r["ancf_jax"]["per_step_s"] / r["ancf_jax"]["iterations_per_step"] / r["elements"]
+              for r in s.get("rows", []) if r["elements"] >= s.get("fit_from", 24)
+              and r.get("ancf_jax", {}).get("status", "ok") == "ok" and r["ancf_jax"].get("iterations_per_step")]
+    if len(per_it) >= 2:
+        # the cost per element and Newton iteration over the fitted counts: a trend in it is
+        # growth of the work; a scatter without one is the machine's timing noise
+        detail += (f"; cost per element and Newton iteration {f(min(per_it) * 1e6)}–{f(max(per_it) * 1e6)} µs "
+                   f"over those counts (in count order: "
+                   + ", ".join(f(x * 1e6) for x in per_it) + ")")
     prof = s.get("profiles") if s else None
     if prof and len(prof) >= 2:
         a, b = prof[0], prof[-1]

@@ -109,6 +109,7 @@ def test_report_renders_from_json_only(tmp_path):
     scaling_line = next(v for k, v in lines.items() if k.startswith("per-step cost"))
     assert "missed: p = 1.3 > 1" in scaling_line and "marginal cost 100 µs per element and step" in scaling_line
     assert "local exponent 0.98 from 192 to 384 elements" in scaling_line
+    assert "cost per element and Newton iteration 33.3–33.3 µs over those counts" in scaling_line
     assert "the step's timed parts grow ×2.00 and the rest of the step ×4.00" in scaling_line
     assert "| the rest of the step (bare step − parts) | 0.5 | 2 | 4.00 |" in text
     assert "| 384 | 38.4 ms |" in text and "not run (above 192 elements)" in text
