@@ -425,13 +425,15 @@ def _m1_ratio_note(target: bool = False) -> str:
     if not path.exists():
         return ""
     m = json.loads(path.read_text())
+    spread = (f"; the pairs' ratios {m['pair_ratio_quartiles'][0]:.2f}–{m['pair_ratio_quartiles'][1]:.2f} "
+              "(quartiles)" if "pair_ratio_quartiles" in m else "")
     if target:
         return (f"; re-measured {m['stamp']['date'][:10]} on {m['stamp'].get('machine', '?')} "
                 f"(`PYTHONPATH=. python benchmarks/m1_ratio.py`, same settings, interleaved): "
-                f"**{m['ratio']:.2f}** ({m['ancf_run_s']:.3f} s against {m['exudyn_run_s']:.3f} s)")
+                f"**{m['ratio']:.2f}** ({m['ancf_run_s']:.3f} s against {m['exudyn_run_s']:.3f} s{spread})")
     return (f"Re-measured on {m['stamp']['date'][:10]} (`PYTHONPATH=. python benchmarks/m1_ratio.py`: the "
-            f"settings below, interleaved, median of 5): ancf_jax {m['ancf_run_s']:.3f} s against Exudyn "
-            f"{m['exudyn_run_s']:.3f} s, ratio {m['ratio']:.2f}.\n\n")
+            f"settings below, interleaved, median of {m.get('reps', 5)}): ancf_jax {m['ancf_run_s']:.3f} s "
+            f"against Exudyn {m['exudyn_run_s']:.3f} s, ratio {m['ratio']:.2f}{spread}.\n\n")
 
 
 def _loop_kernels() -> dict | None:
