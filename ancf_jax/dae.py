@@ -32,7 +32,7 @@ from .linalg import (AbstractSaddleSolver, AutoSaddleSolver, BlockTridiagonal, S
                      factor_chain, solve_symmetric_implicit)
 from .errors import InexactNewtonMatrixWarning
 from .forces import AbstractForceSet, force_tangent, force_tangent_local, reaction_force_tangent
-from .joints import linear_in_beam_coordinates
+from .joints import nonlinear_joints
 from .newton import ModifiedNewton
 from .system import System
 
@@ -252,13 +252,12 @@ def iteration_matrix(system: System, q, v, lam, t, beta_p, gamma_p, jac, load_fa
     matrix leaves out: exact for a user's joint between rigid bodies, inexact (slower
     Newton, never a different solution) for one nonlinear in beam coordinates.
     """
-    for c in system.constraints:
-        if not linear_in_beam_coordinates(c):
-            warnings.warn(f"joint {c.name!r} ({type(c).__name__}) is not declared linear in the beam coordinates: "
-                          "the Newton matrix leaves out its Hessian between beam coordinates (exact if it does "
-                          "not depend on them nonlinearly; then set linear_in_beam_coordinates = True on its class "
-                          "and its points'; see ancf_jax.joints.AbstractConstraint)",
-                          InexactNewtonMatrixWarning, stacklevel=2)
+    for c in nonlinear_joints(system):
+        warnings.warn(f"joint {c.name!r} ({type(c).__name__}) is not declared linear in the beam coordinates: "
+                      "the Newton matrix leaves out its Hessian between beam coordinates (exact if it does "
+                      "not depend on them nonlinearly; then set linear_in_beam_coordinates = True on its class "
+                      "and its points'; see ancf_jax.joints.AbstractConstraint)",
+                      InexactNewtonMatrixWarning, stacklevel=2)
     chain = None
     if system.chain_size:
         def beam_block(b, nodes, vel):

@@ -535,6 +535,7 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
         # running (a failed member repeating its failing step made every later step run
         # the full retry ladder).
         hs = jnp.where(active, h, FROZEN_STEP * h)
+        first_code = None  # the retry loop's first attempt, where it ran out of retries
         if any(_located(system, options)):
             new2, info, crossed = _located_step(system, integrator, loop.carry, hs, context, options)
         elif options.max_halvings:
@@ -546,7 +547,7 @@ def integrate_fixed(system: System, integrator: AbstractIntegrator, loop: LoopSt
         conv = info.converged
         code = step_status(system, loop.carry, new2, conv, options)
         t_end = new2.t
-        if options.max_halvings and not any(_located(system, options)):
+        if first_code is not None:
             # a step not completed fails as its first attempt (size h), at that attempt's
             # end: NAN where it was not finite, else NEWTON (the step could not be
             # completed), as the located step (_located_step) reports it

@@ -58,6 +58,13 @@ class AbstractConstraint(eqx.Module):
         return tuple(f"{self.name}[{i}]" for i in range(self.size))
 
 
+def nonlinear_joints(system) -> tuple:
+    """The joints of ``system`` not declared linear in the beam coordinates
+    (:func:`linear_in_beam_coordinates`): the Newton matrix leaves out their chain–chain
+    Hessian."""
+    return tuple(c for c in system.constraints if not linear_in_beam_coordinates(c))
+
+
 def linear_in_beam_coordinates(constraint: AbstractConstraint) -> bool:
     """Whether Φ of ``constraint`` is declared linear in the beam coordinates: its class
     and the classes of all its points say so (:class:`AbstractConstraint`)."""

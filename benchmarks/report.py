@@ -490,8 +490,7 @@ def sec_border_elimination(m) -> str:
     step, bound, net = m["bare_step_s"], m["saving_bound_single_s"], m["saving_single_s"]
     share = bound / step
     verdict = (f"not built: the reduced solve would save {share:.1%} of the step, below {BORDER_WORTH:.0%} "
-               "(building it needs the fixed block as static structure of the solver, while a clamp's node index "
-               "is data, and reduced factors of the constant mass)" if share < BORDER_WORTH
+               "(README, Performance: a version built in the solver ran no faster)" if share < BORDER_WORTH
                else f"worth building: the reduced solve would save {share:.1%} of the step")
     this = (f"saves {net * us:.2f} µs against" if net > 0 else f"costs {-net * us:.2f} µs more than") + " the full solve"
     member = m["saving_batch_member_s"]

@@ -115,9 +115,7 @@ def profile(system, state, h, opts, t_end=T_END, *, t_parts=1.0) -> dict:
     k = int(np.argmin(np.abs(np.asarray(res.t) - t_parts)))
     q, v, lam, t = (jnp.asarray(res.q[k]), jnp.asarray(res.v[k]), jnp.asarray(res.lam[k]),
                     float(res.t[k]))
-    am, af, gamma, beta = solver.coefficients
-    beta_p = (1.0 - am) / (h * h * beta * (1.0 - af))
-    gamma_p = gamma / (h * beta)
+    beta_p, gamma_p = solver.newton_factors(h)
 
     def residual(qq):
         _, vjp = jax.vjp(lambda z: system.constraint(z, t), qq)

@@ -263,11 +263,18 @@ def test_joints_are_linear_in_the_beam_coordinates_or_named():
             return jax.jvp(lambda z: system.constraint(z, 0.1), (x,), (w,))[1]
         return jax.jvp(slope, (q,), (w,))[1]
 
+    from ancf_jax.integrators.generalized_alpha import APPROXIMATE_MATRIX_REFINEMENT, GeneralizedAlpha
+    from ancf_jax.joints import nonlinear_joints
+
     system, state = m1()
     distance = BeamPointDistance("strut", BeamPoint(0, jnp.asarray(0.1)), BeamPoint(0, jnp.asarray(0.3)), 0.2)
     assert all(linear_in_beam_coordinates(c) for c in system.constraints)
     assert not linear_in_beam_coordinates(distance)
+    # derivatives refine their tangent solves where the matrix leaves the joint's Hessian out
+    assert GeneralizedAlpha().tangent_refinement(system) == 0 and nonlinear_joints(system) == ()
     system = eqx.tree_at(lambda s: s.constraints, system, (*system.constraints, distance))
+    assert nonlinear_joints(system) == (distance,)
+    assert GeneralizedAlpha().tangent_refinement(system) == APPROXIMATE_MATRIX_REFINEMENT
     q, _, _ = perturbed(system, state, 5)
     w = jnp.zeros_like(q).at[system.chain_indices()].set(
         jax.random.normal(jax.random.PRNGKey(6), (system.chain_size,)))

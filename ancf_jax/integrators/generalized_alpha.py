@@ -108,7 +108,8 @@ the gradient of 8 refinement steps), 2.8–4.6× with the iteration's matrix and
 refinement step (1.2e-7 off), 3.5–5.3× with 4 (the default until 2026-12-07), 4.0–5.6×
 with 8; forward mode (a JVP per parameter) 2.7–5.1×; with the β-rate
 term in the forward iteration's matrix too, the forward run took 2.3× longer (53
-against 23 ms for 0–1 s). Until 2026-12-05 the matrix was factored at the predictor,
+against 23 ms for 0–1 s; measured before that term's element tangent became one Hessian,
+2026-12-07). Until 2026-12-05 the matrix was factored at the predictor,
 and the step sat in a conditional that reverse mode copied every residual through: 6.9×
 at 2 refinement steps."""
 
@@ -123,7 +124,7 @@ import jax
 import jax.numpy as jnp
 
 from .. import dae
-from ..joints import linear_in_beam_coordinates
+from ..joints import nonlinear_joints
 from ..newton import ModifiedNewton
 from ..validation import check_count
 from .base import AbstractIntegrator, AbstractMemory, Carry, StepInfo
@@ -327,7 +328,7 @@ class GeneralizedAlpha(AbstractIntegrator):
         :func:`ancf_jax.joints.linear_in_beam_coordinates`)."""
         if self.refinement is not None:
             return self.refinement
-        if not all(linear_in_beam_coordinates(c) for c in system.constraints):
+        if nonlinear_joints(system):
             return max(self.constraints.refinement, APPROXIMATE_MATRIX_REFINEMENT)
         return self.constraints.refinement
 
@@ -390,10 +391,16 @@ class GeneralizedAlpha(AbstractIntegrator):
         memory = jax.tree.unflatten(tree, [jnp.asarray(a) for a in kept]) if fits else fresh
         return dataclasses.replace(carry, memory=memory)
 
+    def newton_factors(self, h):
+        """(β', γ') of a step of size h [s]: ∂q̈/∂Δq and ∂v/∂Δq along the position
+        correction Δq, the factors of the mass and of the damping in the Newton matrix
+        (:func:`ancf_jax.dae.iteration_matrix`) [1/s², 1/s]."""
+        am, af, gamma, beta = self.coefficients
+        return (1.0 - am) / (h * h * beta * (1.0 - af)), gamma / (h * beta)
+
     def step(self, system, carry: Carry, h, context):
         am, af, gamma, beta = self.coefficients
-        beta_p = (1.0 - am) / (h * h * beta * (1.0 - af))
-        gamma_p = gamma / (h * beta)
+        beta_p, gamma_p = self.newton_factors(h)
         t1 = carry.t + h
         n = system.n_coordinates
 
