@@ -36,6 +36,18 @@ not set (a flag already named in ``XLA_FLAGS``, with any value, is left as it is
   rounding (at most 9e-14 m in q over 1 s of M1 and M2, 1.3e-12 m for the catenary;
   ``python -m benchmarks.kernel_census`` found the YNNPACK kernels at 24 elements).
 
+* ``--xla_cpu_multi_thread_eigen=false``: XLA:CPU runs a ``dot`` it does not fuse as
+  a call into Eigen, which by XLA's default splits the product over the process's
+  thread pool. ancf_jax's products are small (per element and quadrature point, per
+  batch member) and the hand-off to the pool cost more than the second thread gave.
+  Measured on 2 cores (jaxlib 0.10.2, 2026-12-08; ``python -m benchmarks.eigen_threads``:
+  both settings compiled in one process as per-program options, run interleaved,
+  medians of 9, RESULTS.md "Eigen's threads in XLA's dot calls"), on → off: M1 with 96
+  elements 1.11 → 0.71 ms per step, with 384 elements 5.0 → 3.7 ms, a vmapped batch of
+  64 M1 variants 42.9 → 20.8 ms per simulation; M1 (6 elements, 0–2 s) 98 → 96 ms (the
+  same); M2 (24 elements, 0–3 s) 359 → 379 ms (~5 % slower, in three such runs).
+  Results agree to rounding (at most 2.1e-13 m in q over M1 and M2).
+
 Programs that run once per simulation (the initial state: consistent accelerations and
 projections, a few linear solves) are compiled with :func:`run_once_options`, LLVM's
 optimization off (``xla_backend_optimization_level=0``): their XLA compilation takes
@@ -86,7 +98,7 @@ run the same Jacobian program dozens of times.
 An unknown flag in ``XLA_FLAGS`` aborts the process, and XLA renames and removes
 flags between releases, so the flags are added only for the jaxlib releases they were
 measured with (:data:`TESTED_JAXLIB`); other releases run with XLA's defaults.
-``ANCF_JAX_XLA_FLAGS=0`` (or ``off``, ``false``, ``no``) turns both off. Nothing is
+``ANCF_JAX_XLA_FLAGS=0`` (or ``off``, ``false``, ``no``) turns them off. Nothing is
 changed once a JAX backend is running (the flags could no longer take effect).
 """
 
@@ -102,7 +114,8 @@ ENV = "ANCF_JAX_XLA_FLAGS"
 _OFF = ("0", "off", "false", "no")
 
 #: flags added to ``XLA_FLAGS`` (see the module docstring for the measurements)
-DEFAULT_FLAGS = ("--xla_cpu_use_fusion_emitters=false", "--xla_cpu_experimental_ynn_fusion_type=")
+DEFAULT_FLAGS = ("--xla_cpu_use_fusion_emitters=false", "--xla_cpu_experimental_ynn_fusion_type=",
+                 "--xla_cpu_multi_thread_eigen=false")
 
 #: compiler options of the programs that run once per simulation (see the module docstring)
 RUN_ONCE_OPTIONS = {"xla_backend_optimization_level": 0}

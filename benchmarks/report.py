@@ -46,6 +46,9 @@ CENSUS = "kernel_census"
 #: written by ``python -m benchmarks.border_elimination`` (not by benchmarks.run);
 #: rendered after the kernel census
 BORDER = "border_elimination"
+#: written by ``python -m benchmarks.eigen_threads`` (not by benchmarks.run); rendered
+#: after the border elimination
+EIGEN = "eigen_threads"
 #: written by ``python -m benchmarks.pantograph_catenary`` (issue 21; not by
 #: benchmarks.run); rendered last, with its own targets
 PANTOGRAPH = "pantograph_catenary"
@@ -64,7 +67,7 @@ def _dense(options) -> bool:
 
 def load(results: Path) -> dict:
     out = {}
-    for name in SECTIONS + EXTRA + (PROFILE, CENSUS, BORDER, PANTOGRAPH, SUITE, STUDIES):
+    for name in SECTIONS + EXTRA + (PROFILE, CENSUS, BORDER, EIGEN, PANTOGRAPH, SUITE, STUDIES):
         p = results / f"{name}.json"
         if p.exists():
             out[name] = json.loads(p.read_text())
@@ -509,6 +512,23 @@ def sec_border_elimination(m) -> str:
             f"bare step of {step * us:.1f} µs in the same process (`benchmarks.step_profile`'s bare step, from the "
             f"initial state); the elimination as written here {this} ({this_b}). Verdict: {verdict}.\n\n"
             f"_Command: `{m['command']}`; {m['stamp']['date']}._\n")
+
+
+def sec_eigen_threads(m) -> str:
+    """Eigen's thread pool in XLA:CPU's dot calls, on against off
+    (benchmarks/eigen_threads.py); speed-up = median with the pool / median without."""
+    rows = []
+    for r in m["rows"]:
+        on, off = r["median_s"]["on"] * 1e3, r["median_s"]["off"] * 1e3  # all units are ms
+        digits = 3 if off < 10 else 1
+        rows.append([r["case"], r["unit"], f"{on:.{digits}f}", f"{off:.{digits}f}", f"{r['speedup']:.2f}",
+                     "–" if "max_dq_m" not in r else f"{r['max_dq_m']:.1e}"])
+    return ("### Eigen's threads in XLA's dot calls\n\n"
+            f"`{m['option']}` on (XLA's default) and off (ancf_jax's default since 2026-12-08, `ancf_jax/_xla.py`), "
+            "each case compiled both ways in one process as per-program compiler options and run interleaved; "
+            f"medians of {m['reps']} rounds (the batch: of {max(m['reps'] // 3, 1)}):\n\n"
+            + table(["case", "unit", "on", "off", "speed-up (on / off)", "largest Δq [m]"], rows)
+            + f"\n_Command: `{m['command']}`; {m['stamp']['date']}._\n")
 
 
 def sec_single(d):
@@ -979,6 +999,8 @@ def render(results: Path | None = None, out: Path | None = None) -> Path:
             parts.append(sec_kernel_census(data[CENSUS]) + "\n")
         if name == "single_run" and BORDER in data:
             parts.append(sec_border_elimination(data[BORDER]) + "\n")
+        if name == "single_run" and EIGEN in data:
+            parts.append(sec_eigen_threads(data[EIGEN]) + "\n")
         if name == "single_run" and _loop_kernels():
             parts.append(sec_loop_kernels(_loop_kernels()) + "\n")
         if name == "batch":

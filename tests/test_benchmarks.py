@@ -188,6 +188,20 @@ def test_border_elimination_solves_the_same_system_and_renders(tmp_path):
         report.sec_border_elimination(put)
 
 
+def test_eigen_threads_section():
+    """RESULTS.md's rows of benchmarks/eigen_threads.py: medians per unit, the speed-up
+    on / off and the results' difference where the case has one."""
+    rows = [dict(case="M1 (6 el.), 0–2 s", unit="ms per run", median_s=dict(on=0.0984, off=0.0962),
+                 speedup=0.0984 / 0.0962, max_dq_m=1.5e-13),
+            dict(case="bare step, M1 with 384 el., h = 1 ms", unit="ms per step", median_s=dict(on=5.0e-3, off=3.7e-3),
+                 speedup=5.0 / 3.7)]
+    text = report.sec_eigen_threads(dict(stamp=STAMP, option="xla_cpu_multi_thread_eigen", reps=9, rows=rows,
+                                         command="cmd eigen"))
+    assert "| M1 (6 el.), 0–2 s | ms per run | 98.4 | 96.2 | 1.02 | 1.5e-13 |" in text
+    assert "| bare step, M1 with 384 el., h = 1 ms | ms per step | 5.000 | 3.700 | 1.35 | – |" in text
+    assert "medians of 9 rounds (the batch: of 3)" in text and "`cmd eigen`" in text
+
+
 def test_run_without_exudyn_end_to_end(tmp_path, monkeypatch):
     """run.py with --no-exudyn: the agreement section says Exudyn is missing, the report
     is rendered (into the redirected results folder)."""
