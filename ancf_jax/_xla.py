@@ -46,7 +46,10 @@ not set (a flag already named in ``XLA_FLAGS``, with any value, is left as it is
   elements 1.11 → 0.71 ms per step, with 384 elements 5.0 → 3.7 ms, a vmapped batch of
   64 M1 variants 42.9 → 20.8 ms per simulation; M1 (6 elements, 0–2 s) 98 → 96 ms (the
   same); M2 (24 elements, 0–3 s) 359 → 379 ms (~5 % slower, in three such runs).
-  Results agree to rounding (at most 2.1e-13 m in q over M1 and M2).
+  Results agree to rounding (at most 2.1e-13 m in q over M1 and M2). M1 is a control:
+  its 6 elements' products are traced as sums (:mod:`ancf_jax._products`), no ``dot``.
+  Measured on 2 cores only: on a machine with many cores large products may gain from
+  the pool (``XLA_FLAGS=--xla_cpu_multi_thread_eigen=true`` restores XLA's default).
 
 Programs that run once per simulation (the initial state: consistent accelerations and
 projections, a few linear solves) are compiled with :func:`run_once_options`, LLVM's

@@ -14,16 +14,21 @@ per-program XLA compiler option (:func:`ancf_jax.compiler_options`, which takes
 precedence over ``XLA_FLAGS``), and the two programs run interleaved, ``reps`` rounds:
 
 * ``M1``: the 2 s run of M1 (6 elements) at single_run's equal-accuracy settings
-  (``simulate``'s ``wall_time_s``);
+  (``simulate``'s ``wall_time_s``): a control, its element products are traced as
+  multiply-and-sum (6 elements are below :data:`ancf_jax._products.SMALL_BATCH`), so it
+  has no element ``dot`` for the option to act on;
 * ``M2``: the 3 s run of M2 (24 elements) at its settings;
 * ``bare 96``, ``bare 384``: 100 steps of the generalized-α step of M1 with 96 and
   384 elements at h = 1 ms (``benchmarks.step_profile``'s bare step; the scaling
   target's meshes);
 * ``batch 64``: a vmapped ``simulate_batch`` of the first 64 M1 variants of
-  ``benchmarks.batch`` (0–0.5 s, one chunk), per simulation.
+  ``benchmarks.batch`` (0–0.5 s, one chunk), per simulation (its ``batch_wall_time_s``;
+  every member must complete).
 
 The two programs differ only in how Eigen schedules a product, so their results agree
-to rounding (reported: the largest difference in q of the single runs).
+to rounding (reported: the largest difference in q of the single runs). Measured on
+this project's 2-core machine; a machine with many cores may gain from the pool in
+large products (``XLA_FLAGS=--xla_cpu_multi_thread_eigen=true`` restores XLA's default).
 
     python -m benchmarks.eigen_threads [--quick]
 
@@ -44,7 +49,9 @@ OPTION = "xla_cpu_multi_thread_eigen"
 #: the two settings compared, in the order they run in each round
 SETTINGS = {"on": {OPTION: True}, "off": {OPTION: False}}
 FULL = dict(reps=9, batch=64, batch_t_end=0.5, bare=(96, 384), bare_steps=100)
-QUICK = dict(reps=2, batch=8, batch_t_end=0.05, bare=(24,), bare_steps=20)
+QUICK = dict(reps=2, batch=8, batch_t_end=0.05, bare=(48,), bare_steps=20)
+#: rounds of the batch case (each runs the whole batch once per setting)
+BATCH_REPS = 3
 
 
 def _interleaved(run, reps) -> dict:
@@ -105,6 +112,7 @@ def main(argv=None):
                                         plan["bare_steps"])
         progs = {k: bare.lower(carry).compile(compiler_options=o) for k, o in SETTINGS.items()}
         carry, its = jax.block_until_ready(progs["on"](carry))
+        jax.block_until_ready(progs["off"](carry))  # both warm before the clock
 
         def timed(k, progs=progs, carry=carry):
             t0 = time.perf_counter()
@@ -127,15 +135,18 @@ def main(argv=None):
 
     def batch(k):
         with compiler_options(**SETTINGS[k]):
-            t0 = time.perf_counter()
-            simulate_batch(systems, [state] * n, **kw)
-            return time.perf_counter() - t0
+            res = simulate_batch(systems, [state] * n, **kw)
+        failed = [r.status for r in res if r.status != "ok"]
+        if failed:
+            raise RuntimeError(f"eigen_threads: {len(failed)} of {n} batch members failed ({failed[0]})")
+        return res[0].info["batch_wall_time_s"]
 
     for k in SETTINGS:
         batch(k)  # compiles
-    times = _interleaved(batch, max(plan["reps"] // 3, 1))
+    batch_reps = BATCH_REPS if not quick else 1
+    times = _interleaved(batch, batch_reps)
     rows.append(_row(f"vmapped batch of {n} M1 variants, 0–{plan['batch_t_end']:g} s", times, n,
-                     "ms per simulation"))
+                     "ms per simulation", rounds=batch_reps))
     print(f"eigen_threads: {rows[-1]['case']}: on {rows[-1]['median_s']['on'] * 1e3:.1f} ms, "
           f"off {rows[-1]['median_s']['off'] * 1e3:.1f} ms per simulation", flush=True)
     return write("eigen_threads", dict(section="eigen_threads", quick=quick, option=OPTION, reps=plan["reps"],

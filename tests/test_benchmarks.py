@@ -113,8 +113,22 @@ def test_report_renders_from_json_only(tmp_path):
     assert "the step's timed parts grow ×2.00 and the rest of the step ×4.00" in scaling_line
     assert "| the rest of the step (bare step − parts) | 0.5 | 2 | 4.00 |" in text
     assert "| 384 | 38.4 ms |" in text and "not run (above 192 elements)" in text
-    # a fit that stops short of 384 elements (quick mode) is not a verdict on the target
+    # a fit under the limit is met only where the step grows no faster than n between
+    # the two largest meshes (local exponent 0.98 here, then 1.4)
     data = json.loads((tmp_path / "scaling.json").read_text())
+    data["exponent"]["ancf_jax"] = 0.9
+    (tmp_path / "scaling.json").write_text(json.dumps(data))
+    verdict = {}
+    for last in (0.98, 1.4):
+        data["marginal"]["ancf_jax"]["last_exponent"] = last
+        (tmp_path / "scaling.json").write_text(json.dumps(data))
+        text = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
+        verdict[last] = next(ln for ln in text.splitlines() if ln.startswith("| per-step cost"))
+    assert "| met |" in verdict[0.98]
+    assert "missed: p = 0.9 ≤ 1 by the fit, but the step grows faster than n" in verdict[1.4]
+    # a fit that stops short of 384 elements (quick mode) is not a verdict on the target
+    data["exponent"]["ancf_jax"] = 1.3
+    data["marginal"]["ancf_jax"]["last_exponent"] = 0.98
     data["rows"] = data["rows"][:2]
     (tmp_path / "scaling.json").write_text(json.dumps(data))
     text = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
@@ -194,12 +208,24 @@ def test_eigen_threads_section():
     rows = [dict(case="M1 (6 el.), 0–2 s", unit="ms per run", median_s=dict(on=0.0984, off=0.0962),
                  speedup=0.0984 / 0.0962, max_dq_m=1.5e-13),
             dict(case="bare step, M1 with 384 el., h = 1 ms", unit="ms per step", median_s=dict(on=5.0e-3, off=3.7e-3),
-                 speedup=5.0 / 3.7)]
+                 speedup=5.0 / 3.7),
+            dict(case="batch of 4", unit="ms per simulation", median_s=dict(on=0.04, off=0.02), speedup=2.0, rounds=3)]
     text = report.sec_eigen_threads(dict(stamp=STAMP, option="xla_cpu_multi_thread_eigen", reps=9, rows=rows,
                                          command="cmd eigen"))
     assert "| M1 (6 el.), 0–2 s | ms per run | 98.4 | 96.2 | 1.02 | 1.5e-13 |" in text
     assert "| bare step, M1 with 384 el., h = 1 ms | ms per step | 5.000 | 3.700 | 1.35 | – |" in text
-    assert "medians of 9 rounds (the batch: of 3)" in text and "`cmd eigen`" in text
+    assert "medians of 9 rounds (batch of 4: of 3)" in text and "`cmd eigen`" in text
+    assert "| case | unit | on | off | speed-up (on / off) | largest Δq [m] |\n| --- |" in text
+
+
+def test_eigen_threads_rows_per_unit_and_speedup():
+    """benchmarks/eigen_threads.py's row: times per unit (a run of 100 steps per step),
+    medians, minima, and the speed-up as the setting on over off (> 1: off faster)."""
+    from benchmarks.eigen_threads import _row
+    row = _row("case", {"on": [0.3, 0.1, 0.2], "off": [0.05, 0.1, 0.08]}, 100, "ms per step")
+    assert row["median_s"] == {"on": 0.2 / 100, "off": 0.08 / 100}
+    assert row["min_s"] == {"on": 0.1 / 100, "off": 0.05 / 100}
+    assert row["speedup"] == pytest.approx(2.5) and row["times_s"]["off"][0] == 0.05 / 100
 
 
 def test_run_without_exudyn_end_to_end(tmp_path, monkeypatch):
