@@ -18,7 +18,11 @@ against 0.069 s; 12 elements 151 against 114 µs per step; 24 elements 262–283
 262–276 µs (even); 96 elements 930 against 1267 µs and 384 elements 3989 against 5176
 (so ``dot`` there); a vmapped batch of 64 M1 variants, 98 against 134 ms per
 simulation. Results agree to rounding (another
-summation order).
+summation order). Re-checked on 2026-12-08 after Eigen's thread pool was turned off in
+``dot`` calls (:mod:`ancf_jax._xla`), which made ``dot`` cheaper: bare steps of M1 at
+single_run's settings traced both ways and compiled in one process, medians of 9
+interleaved, sums against ``dot``: 12 elements 72.6 against 75.2 µs per step, 24
+elements 113.3 against 110.5 µs (even), so the threshold stays.
 """
 
 from __future__ import annotations

@@ -42,10 +42,11 @@ not set (a flag already named in ``XLA_FLAGS``, with any value, is left as it is
   batch member) and the hand-off to the pool cost more than the second thread gave.
   Measured on 2 cores (jaxlib 0.10.2, 2026-12-08; ``python -m benchmarks.eigen_threads``:
   both settings compiled in one process as per-program options, run interleaved,
-  medians of 9, RESULTS.md "Eigen's threads in XLA's dot calls"), on → off: M1 with 96
-  elements 1.11 → 0.71 ms per step, with 384 elements 5.0 → 3.7 ms, a vmapped batch of
-  64 M1 variants 42.9 → 20.8 ms per simulation; M1 (6 elements, 0–2 s) 98 → 96 ms (the
-  same); M2 (24 elements, 0–3 s) 359 → 379 ms (~5 % slower, in three such runs).
+  medians of 9, RESULTS.md "Eigen's threads in XLA's dot calls"), on → off in two runs:
+  M1 with 96 elements 1.11 → 0.71 and 0.94 → 0.63 ms per step, with 384 elements 5.0 → 3.7
+  and 4.0 → 2.9 ms, a vmapped batch of 64 M1 variants 42.9 → 20.8 and 34.2 → 17.1 ms per
+  simulation; M1 (6 elements, 0–2 s) 98 → 96 and 118 → 125 ms (the run-to-run spread);
+  M2 (24 elements, 0–3 s) 359 → 379 and 533 → 541 ms (1.5–6 % slower in four runs).
   Results agree to rounding (at most 2.1e-13 m in q over M1 and M2). M1 is a control:
   its 6 elements' products are traced as sums (:mod:`ancf_jax._products`), no ``dot``.
   Measured on 2 cores only: on a machine with many cores large products may gain from

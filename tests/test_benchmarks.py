@@ -375,6 +375,9 @@ def test_report_pantograph_section_from_its_json(tmp_path):
     data = json.loads((Path(report.DEFAULT_RESULTS) / "pantograph_catenary.json").read_text())
     for later in ("scaling_shipped", "batch_full"):  # first as before those parts were run
         data.pop(later, None)
+    # the 250 km/h run's figures set here (a re-run of the benchmark changes the committed ones)
+    run = next(r for r in data["full"]["runs"] if r["statistics"]["speed_kmh"] == 250.0)
+    run.update(wall_s=52.5, simulated_s=6.04, build_and_statics_s=12.7, compile_s=16.2, real_time_factor=8.69)
     (tmp_path / "pantograph_catenary.json").write_text(json.dumps(data))
     text = report.render(tmp_path, tmp_path / "RESULTS.md").read_text()
     rows = {ln.split("|")[1].strip(): ln for ln in text.splitlines() if ln.startswith("| ")}
