@@ -2,8 +2,9 @@
 """M1 (or, with the argument M2, M2 with 24 elements, 0-3 s) single run ratio against Exudyn
 at the equal-accuracy settings that benchmarks/results/single_run.json chose for each code
 (M1 0-2 s), interleaved, one process: REPS pairs of runs (one of each code), the medians'
-ratio, and the quartiles of the pairs' ratios (how much the machine's speed moved during
-the measurement)."""
+ratio, and the median and quartiles of the pairs' own ratios (how much the machine's speed
+moved during the measurement; with a skewed spread the medians' ratio can lie outside
+them), and every run's time."""
 import json, statistics, sys, time
 from benchmarks import cases as C
 from benchmarks import exudyn_models as em
@@ -27,7 +28,8 @@ a, x = statistics.median(a_t), statistics.median(e_t)
 pairs = sorted(p / q for p, q in zip(a_t, e_t))
 quartiles = statistics.quantiles(pairs, n=4)
 out = dict(ancf_options=opts, ancf_dt=kw["dt"], exudyn_dt=e_dt, ancf_run_s=a, exudyn_run_s=x, ratio=a / x, ancf_compile_s=r.compile_time_s,
-           exudyn_status=er.status, ancf_status=r.status, reps=REPS, pair_ratio_quartiles=[quartiles[0], quartiles[2]])
+           exudyn_status=er.status, ancf_status=r.status, reps=REPS, pair_ratio_quartiles=[quartiles[0], quartiles[2]],
+           pair_ratio_median=statistics.median(pairs), ancf_runs_s=a_t, exudyn_runs_s=e_t)
 print(json.dumps(out))
 # kept for benchmarks/RESULTS.md (report.sec_single: the latest re-measurement)
 from benchmarks.common import write  # noqa: E402

@@ -436,7 +436,8 @@ def _m1_ratio_note(target: bool = False) -> str:
     if not path.exists():
         return ""
     m = json.loads(path.read_text())
-    spread = (f"; the pairs' ratios {m['pair_ratio_quartiles'][0]:.2f}–{m['pair_ratio_quartiles'][1]:.2f} "
+    median = f"median {m['pair_ratio_median']:.2f}, " if "pair_ratio_median" in m else ""
+    spread = (f"; the pairs' own ratios {median}{m['pair_ratio_quartiles'][0]:.2f}–{m['pair_ratio_quartiles'][1]:.2f} "
               "(quartiles)" if "pair_ratio_quartiles" in m else "")
     if target:
         return (f"; re-measured {m['stamp']['date'][:10]} on {m['stamp'].get('machine', '?')} "
