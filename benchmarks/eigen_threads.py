@@ -55,13 +55,9 @@ BATCH_REPS = 3
 
 
 def _interleaved(run, reps) -> dict:
-    """``{setting: [seconds, ...]}`` of ``run(setting)`` (returns seconds) over ``reps``
-    rounds that run every setting once."""
-    times = {k: [] for k in SETTINGS}
-    for _ in range(reps):
-        for k in SETTINGS:
-            times[k].append(run(k))
-    return times
+    """``{setting: [seconds, ...]}`` of ``run(setting)`` over ``reps`` interleaved rounds
+    (:func:`benchmarks.cases.interleaved`)."""
+    return C.interleaved({k: (lambda k=k: run(k)) for k in SETTINGS}, reps)
 
 
 def _row(case, times, per, unit, **extra) -> dict:
